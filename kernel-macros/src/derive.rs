@@ -1,0 +1,90 @@
+//! `#[derive(GpuType)]` for `#[repr(C)]` structs: registers the naga struct with the
+//! host's field offsets and checks, at compile time, that those offsets and the size
+//! follow the GPU's layout rules (so a buffer of the struct means the same bytes on the
+//! host and in the shader). The member index of a field is found from its offset.
+
+use proc_macro2::TokenStream;
+use quote::{quote, quote_spanned};
+use syn::spanned::Spanned;
+use syn::DeriveInput;
+
+use crate::rewrite::err;
+
+pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
+    let name = &input.ident;
+    if !input.generics.params.is_empty() {
+        return err(input.generics.span(), "`#[derive(GpuType)]` does not support generic structs");
+    }
+    let repr_c = input.attrs.iter().any(|a| {
+        a.path().is_ident("repr") && a.parse_args_with(syn::punctuated::Punctuated::<syn::Ident, syn::Token![,]>::parse_terminated)
+            .map(|l| l.iter().any(|i| i == "C"))
+            .unwrap_or(false)
+    });
+    if !repr_c {
+        return err(name.span(), "`#[derive(GpuType)]` needs `#[repr(C)]` so that the host layout is fixed");
+    }
+    let syn::Data::Struct(s) = &input.data else {
+        return err(name.span(), "`#[derive(GpuType)]` supports structs only");
+    };
+    let syn::Fields::Named(fields) = &s.fields else {
+        return err(s.fields.span(), "`#[derive(GpuType)]` needs named fields");
+    };
+    let name_lit = name.to_string();
+    let mut members = Vec::new();
+    let mut aligns = Vec::new();
+    let mut shareable = Vec::new();
+    let mut checks = Vec::new();
+    let mut index_arms = Vec::new();
+    for (i, f) in fields.named.iter().enumerate() {
+        let fname = f.ident.as_ref().unwrap();
+        let flit = fname.to_string();
+        let ty = &f.ty;
+        let i = i as u32;
+        members.push(quote! {
+            ::cohort::ir::MemberDesc {
+                name: #flit,
+                ty: <#ty as ::cohort::ir::GpuType>::naga_type(m),
+                host_offset: ::core::mem::offset_of!(#name, #fname),
+                gpu_align: <#ty as ::cohort::ir::GpuType>::GPU_ALIGN,
+            }
+        });
+        aligns.push(quote! { <#ty as ::cohort::ir::GpuType>::GPU_ALIGN });
+        shareable.push(quote! { <#ty as ::cohort::ir::GpuType>::HOST_SHAREABLE });
+        let msg = format!(
+            "GpuType `{name_lit}`: field `{flit}` is not at a multiple of its GPU alignment (WGSL: vec3/vec4/mat need 16 bytes, vec2 8); reorder the fields or add padding"
+        );
+        let size_msg = format!("GpuType `{name_lit}`: field `{flit}` has a different size on the host and the GPU (e.g. glam::Mat3); use a type with the same layout");
+        checks.push(quote_spanned! {f.span()=>
+            ::core::assert!(!SHAREABLE_FIELDS || ::core::mem::offset_of!(#name, #fname) % <#ty as ::cohort::ir::GpuType>::GPU_ALIGN == 0, #msg);
+            ::core::assert!(!<#ty as ::cohort::ir::GpuType>::HOST_SHAREABLE || ::core::mem::size_of::<#ty>() == <#ty as ::cohort::ir::GpuType>::GPU_SIZE, #size_msg);
+        });
+        index_arms.push(quote! { if offset == ::core::mem::offset_of!(#name, #fname) { return ::core::option::Option::Some(#i); } });
+    }
+    let size_msg = format!(
+        "GpuType `{name_lit}`: its size is not a multiple of its GPU alignment (the largest field alignment); add padding fields at the end"
+    );
+    Ok(quote! {
+        const _: () = {
+            const SHAREABLE_FIELDS: bool = true #(&& #shareable)*;
+            const ALIGN: usize = { let mut a = 1usize; #( if #aligns > a { a = #aligns; } )* a };
+            #(#checks)*
+            ::core::assert!(!SHAREABLE_FIELDS || ::core::mem::size_of::<#name>() % ALIGN == 0, #size_msg);
+        };
+        unsafe impl ::cohort::ir::GpuType for #name {
+            fn naga_type(m: &mut ::cohort::naga::Module) -> ::cohort::naga::Handle<::cohort::naga::Type> {
+                let members = ::std::vec![#(#members),*];
+                ::cohort::ir::struct_type(m, #name_lit, members, ::core::mem::size_of::<#name>(), <Self as ::cohort::ir::GpuType>::GPU_ALIGN, <Self as ::cohort::ir::GpuType>::HOST_SHAREABLE)
+            }
+            const GPU_ALIGN: usize = { let mut a = 1usize; #( if #aligns > a { a = #aligns; } )* a };
+            const GPU_SIZE: usize = ::core::mem::size_of::<#name>();
+            const HOST_SHAREABLE: bool = true #(&& #shareable)*;
+            fn member_index(offset: usize) -> ::core::option::Option<u32> {
+                #(#index_arms)*
+                ::core::option::Option::None
+            }
+        }
+        impl ::cohort::ir::HostRepr for #name {
+            type Pod = #name;
+        }
+    })
+}

@@ -1,0 +1,224 @@
+//! `#[kernel_fn]`, `#[kernel_trait]` and `#[kernel_impl]`: helpers callable from kernels.
+//!
+//! A free helper `f` keeps its host body and gets a module `f` with `ir`, the IR version;
+//! a trait method `m` gets a sibling `__ir_m`. Helpers become naga functions (one per
+//! generic instance), except those taking buffers, which are inlined into the caller
+//! because WGSL cannot pass storage pointers to functions.
+
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote, quote_spanned};
+use syn::spanned::Spanned;
+use syn::{FnArg, Pat, Signature, Type};
+
+use crate::rewrite::{err, Bind, Rewriter};
+
+struct IrSig {
+    params: Vec<TokenStream>,
+    names: Vec<syn::Ident>,
+    /// Statements run at the top of the body (conversions, `mut` rebinding).
+    prelude: Vec<TokenStream>,
+    /// Names passed through the naga function boundary (non-inline only).
+    arg_names: Vec<syn::Ident>,
+    ret: TokenStream,
+    inline: bool,
+    binds: Vec<(String, Bind)>,
+}
+
+fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
+    let mut out = IrSig {
+        params: vec![],
+        names: vec![],
+        prelude: vec![],
+        arg_names: vec![],
+        ret: quote!(()),
+        inline: false,
+        binds: vec![],
+    };
+    for arg in &sig.inputs {
+        let FnArg::Typed(pt) = arg else {
+            return err(arg.span(), "kernel helpers take no `self`; use an associated function (`fn f(x: T)`)");
+        };
+        let (name, mutable) = match &*pt.pat {
+            Pat::Ident(i) => (i.ident.clone(), i.mutability.is_some()),
+            other => return err(other.span(), "helper parameters bind one name each"),
+        };
+        let span = pt.ty.span();
+        match &*pt.ty {
+            Type::Reference(r) => match &*r.elem {
+                Type::Slice(s) => {
+                    let elem = &s.elem;
+                    out.inline = true;
+                    out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Buffer<#elem> });
+                    out.binds.push((name.to_string(), Bind::Root));
+                }
+                elem if r.mutability.is_some() => {
+                    out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Place<#elem> });
+                    out.arg_names.push(name.clone());
+                    out.binds.push((name.to_string(), Bind::Root));
+                }
+                elem => {
+                    out.params.push(quote_spanned! {span=> #name: impl ::cohort::ir::ToVal<#elem> });
+                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::ToVal::to_val(#name); });
+                    out.arg_names.push(name.clone());
+                    out.binds.push((name.to_string(), Bind::Val));
+                }
+            },
+            ty => {
+                out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Val<#ty> });
+                out.arg_names.push(name.clone());
+                if mutable {
+                    let lit = name.to_string();
+                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::Var::new(#lit, #name); });
+                    out.binds.push((name.to_string(), Bind::Var));
+                } else {
+                    out.binds.push((name.to_string(), Bind::Val));
+                }
+            }
+        }
+        out.names.push(name);
+    }
+    if let syn::ReturnType::Type(_, t) = &sig.output {
+        out.ret = quote_spanned! {t.span()=> ::cohort::ir::Val<#t> };
+    }
+    if sig.asyncness.is_some() || sig.unsafety.is_some() {
+        return err(sig.span(), "kernel helpers are plain `fn`s (not async or unsafe)");
+    }
+    Ok(out)
+}
+
+/// Builds the body of an IR function: `function::<Key>(..)` or, inlined, the body.
+fn ir_body(sig: &Signature, block: &syn::Block, key: TokenStream, extra_generics: &[String], display: &str) -> syn::Result<(IrSig, TokenStream)> {
+    let s = ir_signature(sig)?;
+    let mut rw = Rewriter::new();
+    for g in sig.generics.type_params() {
+        rw.generics.insert(g.ident.to_string());
+    }
+    for g in extra_generics {
+        rw.generics.insert(g.clone());
+    }
+    rw.forbid_return = s.inline;
+    for (n, b) in &s.binds {
+        rw.bind(n, *b);
+    }
+    let body = rw.block(block)?;
+    let prelude = &s.prelude;
+    let tokens = if s.inline {
+        quote! { #(#prelude)* #body }
+    } else {
+        let conv: Vec<_> = prelude.iter().filter(|t| t.to_string().contains("ToVal")).collect();
+        let rebind: Vec<_> = prelude.iter().filter(|t| !t.to_string().contains("ToVal")).collect();
+        let args = &s.arg_names;
+        let lits: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        quote! {
+            #(#conv)*
+            ::cohort::ir::function::<#key, _, _>(#display, &[#(#lits),*], (#(#args,)*), |(#(#args,)*)| {
+                #(#rebind)*
+                #body
+            })
+        }
+    };
+    Ok((s, tokens))
+}
+
+fn static_where(generics: &syn::Generics) -> TokenStream {
+    let tps: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
+    let bounds = tps.iter().map(|t| quote!(#t: 'static));
+    match &generics.where_clause {
+        Some(w) => {
+            let preds = &w.predicates;
+            quote!(where #preds, #(#bounds),*)
+        }
+        None if tps.is_empty() => quote!(),
+        None => quote!(where #(#bounds),*),
+    }
+}
+
+pub fn expand_fn(f: syn::ItemFn) -> syn::Result<TokenStream> {
+    let name = &f.sig.ident;
+    let vis = &f.vis;
+    let generics = &f.sig.generics;
+    let tps: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
+    let key = quote!(__Key<#(#tps),*>);
+    let (s, body) = ir_body(&f.sig, &f.block, key, &[], &name.to_string())?;
+    let params = &s.params;
+    let ret = &s.ret;
+    let wh = static_where(generics);
+    Ok(quote! {
+        #f
+
+        #[allow(non_snake_case, unused_imports, unused_variables, unused_mut, unused_braces, unused_parens, clippy::all)]
+        #vis mod #name {
+            use super::*;
+            #[doc(hidden)]
+            pub struct __Key #generics (::core::marker::PhantomData<fn() -> (#(#tps,)*)>);
+            /// The IR version of the helper, called from rewritten kernel code.
+            pub fn ir #generics (#(#params),*) -> #ret #wh {
+                #body
+            }
+        }
+    })
+}
+
+fn is_assoc_fn(sig: &Signature) -> bool {
+    !matches!(sig.inputs.first(), Some(FnArg::Receiver(_)))
+}
+
+pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
+    let trait_name = t.ident.to_string();
+    let mut extra = Vec::new();
+    for item in &t.items {
+        if let syn::TraitItem::Fn(m) = item {
+            if !is_assoc_fn(&m.sig) {
+                return err(m.sig.span(), "kernel trait methods take no `self`: strategies are types with associated functions and constants");
+            }
+            let ir_name = format_ident!("__ir_{}", m.sig.ident);
+            let s = ir_signature(&m.sig)?;
+            let params = &s.params;
+            let ret = &s.ret;
+            let generics = &m.sig.generics;
+            let decl = match &m.default {
+                Some(block) => {
+                    let display = format!("{}_{}", trait_name, m.sig.ident);
+                    let (_, body) = ir_body(&m.sig, block, quote!(Self), &["Self".to_string()], &display)?;
+                    quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens)] fn #ir_name #generics (#(#params),*) -> #ret { #body } }
+                }
+                None => quote! { #[doc(hidden)] fn #ir_name #generics (#(#params),*) -> #ret; },
+            };
+            extra.push(syn::parse2::<syn::TraitItem>(decl)?);
+        }
+    }
+    t.items.extend(extra);
+    // Helper instances are keyed by the implementing type, which must be 'static.
+    t.supertraits.push(syn::parse_quote!('static));
+    if t.colon_token.is_none() {
+        t.colon_token = Some(Default::default());
+    }
+    Ok(quote!(#t))
+}
+
+pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
+    let Some((_, trait_path, _)) = &i.trait_ else {
+        return err(i.span(), "`#[kernel_impl]` goes on `impl Trait for Type` of a `#[kernel_trait]`");
+    };
+    let trait_name = trait_path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
+    let mut extra = Vec::new();
+    for item in &i.items {
+        if let syn::ImplItem::Fn(m) = item {
+            if !is_assoc_fn(&m.sig) {
+                return err(m.sig.span(), "kernel trait methods take no `self`");
+            }
+            let ir_name = format_ident!("__ir_{}", m.sig.ident);
+            let display = format!("{}_{}", trait_name, m.sig.ident);
+            let (s, body) = ir_body(&m.sig, &m.block, quote!(Self), &["Self".to_string()], &display)?;
+            let params = &s.params;
+            let ret = &s.ret;
+            let generics = &m.sig.generics;
+            extra.push(syn::parse2::<syn::ImplItem>(quote! {
+                #[allow(unused_variables, unused_mut, unused_braces, unused_parens)]
+                fn #ir_name #generics (#(#params),*) -> #ret { #body }
+            })?);
+        }
+    }
+    i.items.extend(extra);
+    Ok(quote!(#i))
+}

@@ -1,0 +1,377 @@
+//! `#[kernel]`: keeps the function for the host and generates, in a module of the same
+//! name, `build` (the rewritten body that builds IR), `artifact` (cached compile) and
+//! the typed `launch` functions.
+
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote, quote_spanned};
+use std::collections::HashSet;
+use syn::parse::{Parse, ParseStream};
+use syn::spanned::Spanned;
+use syn::{FnArg, ItemFn, Pat, Type};
+
+use crate::rewrite::{err, Bind, Rewriter};
+use crate::uniformity;
+
+pub struct KernelAttr {
+    workgroup: u32,
+    group: TokenStream,
+}
+
+impl Parse for KernelAttr {
+    fn parse(input: ParseStream) -> syn::Result<Self> {
+        let mut attr = KernelAttr { workgroup: 64, group: quote!(::cohort::Group::Thread) };
+        let mut group_block: Option<u32> = None;
+        while !input.is_empty() {
+            let key: syn::Ident = input.parse()?;
+            input.parse::<syn::Token![=]>()?;
+            match key.to_string().as_str() {
+                "workgroup" => {
+                    let n: syn::LitInt = input.parse()?;
+                    let v: u32 = n.base10_parse()?;
+                    if v == 0 || v > 1024 {
+                        return Err(syn::Error::new(n.span(), "workgroup size must be in 1..=1024"));
+                    }
+                    attr.workgroup = v;
+                }
+                "group" => {
+                    let g: syn::Ident = input.parse()?;
+                    attr.group = match g.to_string().as_str() {
+                        "Thread" => quote!(::cohort::Group::Thread),
+                        "Warp" => quote!(::cohort::Group::Warp),
+                        "Grid" => quote!(::cohort::Group::Grid),
+                        "Block" => {
+                            let content;
+                            syn::parenthesized!(content in input);
+                            let n: syn::LitInt = content.parse()?;
+                            let v: u32 = n.base10_parse()?;
+                            if v == 0 || v > 1024 {
+                                return Err(syn::Error::new(n.span(), "Block(n) needs n in 1..=1024"));
+                            }
+                            group_block = Some(v);
+                            quote!(::cohort::Group::Block(#v))
+                        }
+                        _ => {
+                            return Err(syn::Error::new(
+                                g.span(),
+                                "unknown group level; expected `Thread`, `Warp`, `Block(n)` or `Grid`",
+                            ))
+                        }
+                    };
+                }
+                other => {
+                    return Err(syn::Error::new(
+                        key.span(),
+                        format!("unknown kernel option `{other}`; expected `workgroup = N` or `group = Thread | Warp | Block(n) | Grid`"),
+                    ))
+                }
+            }
+            if !input.is_empty() {
+                input.parse::<syn::Token![,]>()?;
+            }
+        }
+        if let Some(n) = group_block {
+            attr.workgroup = n;
+        }
+        Ok(attr)
+    }
+}
+
+enum ParamKind {
+    Builtin(syn::Ident),
+    Storage { elem: Type, writable: bool },
+    Uniform(Type),
+    Workgroup(Type),
+}
+
+struct Param {
+    name: syn::Ident,
+    kind: ParamKind,
+}
+
+const BUILTINS: &[&str] = &[
+    "global_index", "local_index", "workgroup_index", "global_id", "local_id", "workgroup_id", "num_workgroups",
+    "workgroup_size", "subgroup_size", "subgroup_lane", "subgroup_invocation_id", "subgroup_id", "num_subgroups",
+];
+
+fn is_atomic(t: &Type) -> bool {
+    if let Type::Path(p) = t {
+        if let Some(s) = p.path.segments.last() {
+            return s.ident == "AtomicU32" || s.ident == "AtomicI32";
+        }
+    }
+    false
+}
+
+fn classify(arg: &mut FnArg) -> syn::Result<Param> {
+    let FnArg::Typed(pt) = arg else {
+        return err(arg.span(), "kernels take no `self`");
+    };
+    let name = match &*pt.pat {
+        Pat::Ident(i) => i.ident.clone(),
+        other => return err(other.span(), "kernel parameters bind one name each"),
+    };
+    let mut builtin = None;
+    let mut workgroup = false;
+    let mut kept = Vec::new();
+    for a in pt.attrs.drain(..) {
+        if a.path().is_ident("builtin") {
+            let id: syn::Ident = a.parse_args()?;
+            let s = id.to_string();
+            if !BUILTINS.contains(&s.as_str()) {
+                return err(id.span(), format!("unknown builtin `{s}`; expected one of: {}", BUILTINS.join(", ")));
+            }
+            builtin = Some(if s == "subgroup_invocation_id" { format_ident!("subgroup_lane", span = id.span()) } else { id });
+        } else if a.path().is_ident("workgroup") {
+            workgroup = true;
+        } else {
+            kept.push(a);
+        }
+    }
+    pt.attrs = kept;
+    let kind = if let Some(b) = builtin {
+        ParamKind::Builtin(b)
+    } else {
+        match &*pt.ty {
+            Type::Reference(r) => {
+                if workgroup {
+                    if r.mutability.is_none() {
+                        return err(r.span(), "workgroup memory parameters are `&mut T`");
+                    }
+                    ParamKind::Workgroup((*r.elem).clone())
+                } else if let Type::Slice(s) = &*r.elem {
+                    let elem = (*s.elem).clone();
+                    let writable = r.mutability.is_some() || is_atomic(&elem);
+                    ParamKind::Storage { elem, writable }
+                } else if r.mutability.is_some() {
+                    return err(r.span(), "`&mut T` kernel parameters must be `#[workgroup]` memory; storage buffers are `&mut [T]`");
+                } else {
+                    ParamKind::Uniform((*r.elem).clone())
+                }
+            }
+            other => {
+                return err(
+                    other.span(),
+                    "kernel parameters are storage buffers (`&[T]`, `&mut [T]`), uniforms (`&T`), `#[builtin(..)]` values or `#[workgroup]` memory",
+                )
+            }
+        }
+    };
+    Ok(Param { name, kind })
+}
+
+pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
+    let span = f.sig.ident.span();
+    if let Some(r) = match &f.sig.output {
+        syn::ReturnType::Type(_, t) => Some(t),
+        _ => None,
+    } {
+        return err(r.span(), "kernels return nothing; write results to a buffer");
+    }
+    if f.sig.asyncness.is_some() || f.sig.unsafety.is_some() {
+        return err(f.sig.span(), "kernels are plain `fn`s (not async or unsafe)");
+    }
+    let mut params = Vec::new();
+    for arg in f.sig.inputs.iter_mut() {
+        params.push(classify(arg)?);
+    }
+
+    // Front-end checks: uniformity, and what host-run group closures may read.
+    let mut up = uniformity::Params::default();
+    let mut all_names = HashSet::new();
+    for p in &params {
+        let n = p.name.to_string();
+        all_names.insert(n.clone());
+        match &p.kind {
+            ParamKind::Builtin(b) if uniformity::uniform_builtin(&b.to_string()) => {
+                up.uniform.insert(n);
+            }
+            ParamKind::Builtin(_) => {
+                up.nonuniform.insert(n);
+            }
+            ParamKind::Uniform(_) => {
+                up.uniform_buffers.insert(n);
+            }
+            _ => {}
+        }
+    }
+    uniformity::check(&f.block, &up)?;
+    uniformity::check_grid_closures(&f.block, &up, &all_names)?;
+
+    let mut rw = Rewriter::new();
+    rw.allow_group_share = true;
+    for g in f.sig.generics.type_params() {
+        rw.generics.insert(g.ident.to_string());
+    }
+    let mut decls = Vec::new();
+    let mut launch_params = Vec::new();
+    let mut launch_names = Vec::new();
+    let mut launch_args = Vec::new();
+    let mut uniform_uploads = Vec::new();
+    for (i, p) in params.iter().enumerate() {
+        let name = &p.name;
+        let lit = name.to_string();
+        let pspan = name.span();
+        match &p.kind {
+            ParamKind::Builtin(b) => {
+                let FnArg::Typed(pt) = &f.sig.inputs[i] else { unreachable!() };
+                let ty = &pt.ty;
+                decls.push(quote_spanned! {pspan=> let #name: ::cohort::ir::Val<#ty> = ::cohort::ir::builtin::#b(); });
+                rw.bind(&lit, Bind::Val);
+            }
+            ParamKind::Storage { elem, writable } => {
+                decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Buffer::<#elem>::declare(#lit, #writable); });
+                rw.bind(&lit, Bind::Root);
+                launch_names.push(name.clone());
+                launch_params.push(quote_spanned! {pspan=> #name: &::cohort::runtime::GpuBuffer<<#elem as ::cohort::ir::HostRepr>::Pod> });
+                launch_args.push(quote! { #name.arg() });
+            }
+            ParamKind::Uniform(t) => {
+                decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Uniform::<#t>::declare(#lit); });
+                rw.bind(&lit, Bind::Root);
+                launch_names.push(name.clone());
+                launch_params.push(quote_spanned! {pspan=> #name: &#t });
+                let buf = format_ident!("__uniform_{}", name);
+                uniform_uploads.push(quote! { let #buf = device.upload(::core::slice::from_ref(#name))?; });
+                launch_args.push(quote! { #buf.arg() });
+            }
+            ParamKind::Workgroup(t) => {
+                decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Workgroup::<#t>::declare(#lit); });
+                rw.bind(&lit, Bind::Root);
+            }
+        }
+    }
+    let body = rw.block(&f.block)?;
+
+    // Host-computed group values (group = Grid): the closures of `group_share`, in
+    // source order, evaluated with the launch's uniform arguments in scope.
+    let grid_closures = collect_group_closures(&f.block);
+    let mut grid_uploads = Vec::new();
+    for (k, cl) in grid_closures.iter().enumerate() {
+        let buf = format_ident!("__group_share_{}", k);
+        let body = &cl.body;
+        let input = &cl.inputs[0];
+        grid_uploads.push(quote! {
+            let #buf = if spec.group == ::cohort::Group::Grid {
+                #[allow(unused_variables)]
+                let value = (|#input: u32| #body)(0u32);
+                Some(device.upload(::core::slice::from_ref(&value))?)
+            } else {
+                None
+            };
+            if let Some(b) = &#buf { __args.push(b.arg()); }
+        });
+    }
+
+    let fn_name = &f.sig.ident;
+    let vis = &f.vis;
+    let name_lit = fn_name.to_string();
+    let wg = attr.workgroup;
+    let group = attr.group;
+    let generics = &f.sig.generics;
+    let type_params: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
+    let (impl_g, _, where_clause) = generics.split_for_impl();
+    let static_bounds = type_params.iter().map(|t| quote!(#t: 'static));
+    let where_static = match where_clause {
+        Some(w) => {
+            let preds = &w.predicates;
+            quote!(where #preds, #(#static_bounds),*)
+        }
+        None if type_params.is_empty() => quote!(),
+        None => quote!(where #(#static_bounds),*),
+    };
+    let turbofish = if type_params.is_empty() { quote!() } else { quote!(::<#(#type_params),*>) };
+    let key_params = if type_params.is_empty() { quote!() } else { quote!(<#(#type_params),*>) };
+    let line_col = quote_spanned! {span=> (line!(), column!()) };
+
+    // Split off `<...>` to add a lifetime to launch functions.
+    let gparams = &generics.params;
+    let launch_generics = if gparams.is_empty() { quote!(<'__grid>) } else { quote!(<'__grid, #gparams>) };
+    let _ = impl_g;
+
+    Ok(quote! {
+        #f
+
+        #[allow(non_snake_case, unused_imports, unused_variables, unused_mut, unused_braces, unused_parens, clippy::all)]
+        #vis mod #fn_name {
+            use super::*;
+
+            /// Static facts about the kernel (name, definition site, attribute defaults).
+            pub static INFO: ::cohort::KernelInfo = ::cohort::KernelInfo {
+                name: #name_lit,
+                file: file!(),
+                line: #line_col.0,
+                column: #line_col.1,
+                workgroup_size: #wg,
+                group: #group,
+            };
+
+            #[doc(hidden)]
+            pub struct __Key #generics (::core::marker::PhantomData<fn() -> (#(#type_params,)*)>);
+
+            /// Builds the kernel's naga module for one specialisation.
+            pub fn build #generics (spec: &::cohort::Spec) -> ::cohort::ir::BuiltKernel #where_static {
+                ::cohort::ir::build_kernel(&INFO, *spec, || {
+                    #(#decls)*
+                    ::cohort::ir::discard(#body);
+                })
+            }
+
+            /// The compiled kernel (WGSL + SPIR-V) for `spec`, cached after the first call.
+            pub fn artifact #generics (spec: &::cohort::Spec) -> ::core::result::Result<::std::sync::Arc<::cohort::runtime::KernelArtifact>, ::cohort::emit::CompileError> #where_static {
+                ::cohort::launch::artifact::<__Key #key_params>(&INFO, *spec, |s| build #turbofish (s))
+            }
+
+            /// The best specialisation of this kernel for `device` at `group` level
+            /// (the attribute's level when `None`).
+            pub fn spec(device: &::cohort::runtime::Device, group: ::core::option::Option<::cohort::Group>) -> ::cohort::Spec {
+                ::cohort::Spec::for_device(&INFO, device.info(), group.unwrap_or(INFO.group))
+            }
+
+            /// Runs the kernel with the attribute's group level.
+            pub fn launch #launch_generics (
+                device: &::cohort::runtime::Device,
+                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                #(#launch_params),*
+            ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
+                let spec = spec(device, ::core::option::Option::None);
+                launch_spec #turbofish (device, &spec, grid, #(#launch_names),*)
+            }
+
+            /// Runs one specialisation of the kernel.
+            pub fn launch_spec #launch_generics (
+                device: &::cohort::runtime::Device,
+                spec: &::cohort::Spec,
+                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                #(#launch_params),*
+            ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
+                let art = artifact #turbofish (spec)?;
+                #(#uniform_uploads)*
+                let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
+                #(#grid_uploads)*
+                let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
+                ::core::result::Result::Ok(device.dispatch(&art, &__args, dispatch)?)
+            }
+        }
+    })
+}
+
+fn collect_group_closures(b: &syn::Block) -> Vec<syn::ExprClosure> {
+    use syn::visit::Visit;
+    struct V(Vec<syn::ExprClosure>);
+    impl<'ast> Visit<'ast> for V {
+        fn visit_expr_call(&mut self, c: &'ast syn::ExprCall) {
+            let is_share = matches!(&*c.func, syn::Expr::Path(p) if p.path.segments.last().is_some_and(|s| s.ident == "group_share"));
+            if is_share {
+                for a in &c.args {
+                    if let syn::Expr::Closure(cl) = a {
+                        self.0.push(cl.clone());
+                    }
+                }
+            }
+            syn::visit::visit_expr_call(self, c);
+        }
+    }
+    let mut v = V(Vec::new());
+    v.visit_block(b);
+    v.0
+}

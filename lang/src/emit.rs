@@ -1,0 +1,111 @@
+//! Back end: validates a built module, compacts it and writes WGSL and SPIR-V.
+//!
+//! Data flow: `ir::kernel::build_kernel` → [`compile`] → `KernelArtifact` (runtime).
+//! Modules are compacted before writing so that names and ids do not depend on how many
+//! throw-away expressions the builder made; that keeps snapshots stable.
+
+use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+use crate::ir::kernel::BuiltKernel;
+use cohort_runtime::{KernelArtifact, KernelFeatures};
+
+/// A kernel that could not be compiled. Type-correct kernel source should never produce
+/// one: it is a compiler bug, reported at the kernel's definition.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}:{line}:{column}: kernel `{kernel}` ({spec}): {stage}: {message}\n(this is a Cohort compiler bug: the kernel type-checked, so its IR should be valid)")]
+pub struct CompileError {
+    pub kernel: String,
+    pub spec: String,
+    pub file: String,
+    pub line: u32,
+    pub column: u32,
+    pub stage: &'static str,
+    pub message: String,
+}
+
+fn capabilities(uses_subgroups: bool) -> Capabilities {
+    let mut caps = Capabilities::empty();
+    if uses_subgroups {
+        caps |= Capabilities::SUBGROUP | Capabilities::SUBGROUP_BARRIER;
+    }
+    caps
+}
+
+fn validate(module: &naga::Module, caps: Capabilities) -> Result<naga::valid::ModuleInfo, String> {
+    Validator::new(ValidationFlags::all(), caps).validate(module).map_err(|e| {
+        let inner = e.as_inner();
+        format!("naga validation failed: {inner}\n{inner:?}")
+    })
+}
+
+/// Output of the back end for one specialisation.
+pub struct Emitted {
+    pub module: naga::Module,
+    pub wgsl: String,
+    pub spirv: Vec<u32>,
+    pub entry_point: String,
+}
+
+/// Validates, compacts and writes both shader languages.
+pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
+    let err = |stage: &'static str, message: String| CompileError {
+        kernel: built.info.name.to_string(),
+        spec: built.spec.suffix(),
+        file: built.info.file.to_string(),
+        line: built.info.line,
+        column: built.info.column,
+        stage,
+        message,
+    };
+    let caps = capabilities(built.uses_subgroups);
+    let mut module = built.module.clone();
+    validate(&module, caps).map_err(|m| err("validate", m))?;
+    naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
+    let info = validate(&module, caps).map_err(|m| err("validate after compact", m))?;
+    let wgsl = naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
+        .map_err(|e| err("write WGSL", e.to_string()))?;
+    // The WGSL namer may rename the entry point (a name ending in a digit gets a `_`);
+    // use its name for both languages so one `entry_point` serves both backends.
+    let entry = wgsl_entry_point(&wgsl).unwrap_or_else(|| built.info.name.to_string());
+    module.entry_points[0].name = entry.clone();
+    let info = validate(&module, caps).map_err(|m| err("validate after rename", m))?;
+    let options = naga::back::spv::Options {
+        // Subgroup operations need SPIR-V 1.3; 1.0 would silently declare capabilities
+        // that spirv-val rejects.
+        lang_version: (1, 3),
+        flags: naga::back::spv::WriterFlags::empty(),
+        ..Default::default()
+    };
+    let pipeline = naga::back::spv::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: entry.clone(),
+    };
+    let spirv = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
+        .map_err(|e| err("write SPIR-V", e.to_string()))?;
+    Ok(Emitted { module, wgsl, spirv, entry_point: entry })
+}
+
+fn wgsl_entry_point(wgsl: &str) -> Option<String> {
+    let at = wgsl.find("@compute")?;
+    let rest = &wgsl[at..];
+    let f = rest.find("fn ")? + 3;
+    let name: String = rest[f..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+    (!name.is_empty()).then_some(name)
+}
+
+/// Compiles a built kernel into what the runtime dispatches.
+pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, CompileError> {
+    let e = emit(built)?;
+    Ok(KernelArtifact {
+        name,
+        entry_point: e.entry_point,
+        wgsl: e.wgsl,
+        spirv: e.spirv,
+        workgroup_size: [built.spec.workgroup_size, 1, 1],
+        bindings: built.bindings.clone(),
+        features: KernelFeatures {
+            subgroups: built.uses_subgroups,
+            required_subgroup_size: built.spec.required_subgroup_size,
+        },
+    })
+}

@@ -1,0 +1,59 @@
+//! Running a kernel's plain Rust function on the host, one invocation at a time, for
+//! tests and references. Kernels without barriers or cross-invocation communication
+//! compute the same thing here as on the GPU; subgroups are one lane wide.
+
+use std::cell::Cell;
+
+use crate::spec::{Group, WARP};
+use glam::UVec3;
+
+thread_local! {
+    static GROUP: Cell<u32> = const { Cell::new(0) };
+}
+
+/// The coherence group of the invocation the host is running (read by `group_share`).
+pub fn current_group() -> u32 {
+    GROUP.with(|g| g.get())
+}
+
+/// What a kernel's `#[builtin]` parameters would receive.
+#[derive(Clone, Copy, Debug)]
+pub struct Invocation {
+    pub global_index: u32,
+    pub local_index: u32,
+    pub workgroup_index: u32,
+    pub global_id: UVec3,
+    pub local_id: UVec3,
+    pub workgroup_id: UVec3,
+    pub num_workgroups: UVec3,
+    pub group: u32,
+}
+
+/// Calls `f` for each of `threads` invocations (rounded up to whole workgroups, like a
+/// launch with `Grid::Threads`), in order, setting the group index for `group_share`.
+pub fn for_each_invocation(threads: u32, workgroup_size: u32, group: Group, mut f: impl FnMut(Invocation)) {
+    let groups = threads.div_ceil(workgroup_size).max(1);
+    for wg in 0..groups {
+        for local in 0..workgroup_size {
+            let global = wg * workgroup_size + local;
+            let g = match group {
+                Group::Thread => global,
+                Group::Warp => global / WARP,
+                Group::Block(_) => wg,
+                Group::Grid => 0,
+            };
+            GROUP.with(|c| c.set(g));
+            f(Invocation {
+                global_index: global,
+                local_index: local,
+                workgroup_index: wg,
+                global_id: UVec3::new(global, 0, 0),
+                local_id: UVec3::new(local, 0, 0),
+                workgroup_id: UVec3::new(wg, 0, 0),
+                num_workgroups: UVec3::new(groups, 1, 1),
+                group: g,
+            });
+        }
+    }
+    GROUP.with(|c| c.set(0));
+}

@@ -1,0 +1,225 @@
+//! Functions kernels call that have no plain-Rust equivalent: barriers, subgroup
+//! operations, atomics helpers and `group_share`.
+//!
+//! Each is a pair, like a user's `#[kernel_fn]`: a host function with the meaning it has
+//! when the kernel runs on the host (one invocation at a time, so a subgroup of one
+//! lane), and a module of the same name whose `ir` function builds the GPU version. The
+//! front end rewrites a call `f(args)` into `f::ir(args)`, so both are found through the
+//! same `use`.
+
+use glam::UVec4;
+use std::sync::atomic::{AtomicI32, AtomicU32, Ordering};
+
+use crate::ir::{builder::with, GpuType, Place, Val};
+use naga::{Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement, SubgroupOperation as So};
+
+pub fn workgroup_barrier() {}
+pub mod workgroup_barrier {
+    pub fn ir() {
+        super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::WORK_GROUP)));
+    }
+}
+
+/// Makes storage-buffer writes of the workgroup visible to the workgroup.
+pub fn storage_barrier() {}
+pub mod storage_barrier {
+    pub fn ir() {
+        super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::STORAGE)));
+    }
+}
+
+pub fn subgroup_barrier() {}
+pub mod subgroup_barrier {
+    pub fn ir() {
+        super::with(|c| {
+            c.uses_subgroups = true;
+            c.stmt(super::Statement::ControlBarrier(super::Barrier::SUB_GROUP))
+        });
+    }
+}
+
+/// On the host every invocation runs alone: the group is the one the host runner set.
+pub fn group_share<T>(leader: impl FnOnce(u32) -> T) -> T {
+    leader(crate::host::current_group())
+}
+pub mod group_share {
+    pub fn ir<T: super::GpuType>(leader: impl FnOnce(super::Val<u32>) -> super::Val<T>) -> super::Val<T> {
+        crate::ir::group::group_share(leader)
+    }
+}
+
+fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
+    with(|c| {
+        c.uses_subgroups = true;
+        let ty = T::naga_type(&mut c.module);
+        let result = c.expr(Expression::SubgroupOperationResult { ty });
+        c.stmt(Statement::SubgroupCollectiveOperation { op, collective_op: collective, argument: x.h, result });
+        Val::from_handle(result)
+    })
+}
+
+fn subgroup_gather<T: GpuType>(mode: GatherMode, x: Val<T>) -> Val<T> {
+    with(|c| {
+        c.uses_subgroups = true;
+        let ty = T::naga_type(&mut c.module);
+        let result = c.expr(Expression::SubgroupOperationResult { ty });
+        c.stmt(Statement::SubgroupGather { mode, argument: x.h, result });
+        Val::from_handle(result)
+    })
+}
+
+macro_rules! collective {
+    ($name:ident, $op:expr, $co:expr, $host:expr, $doc:literal) => {
+        #[doc = $doc]
+        pub fn $name<T: Copy + Default>(x: T) -> T {
+            #[allow(clippy::redundant_closure_call)]
+            ($host)(x)
+        }
+        pub mod $name {
+            #[allow(unused_imports)]
+            use super::{Co, So};
+            pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
+                super::subgroup_op($op, $co, x)
+            }
+        }
+    };
+}
+collective!(subgroup_add, So::Add, Co::Reduce, |x| x, "Sum over the subgroup.");
+collective!(subgroup_min, So::Min, Co::Reduce, |x| x, "Minimum over the subgroup.");
+collective!(subgroup_max, So::Max, Co::Reduce, |x| x, "Maximum over the subgroup.");
+collective!(subgroup_inclusive_add, So::Add, Co::InclusiveScan, |x| x, "Sum over lanes up to and including this one.");
+collective!(subgroup_exclusive_add, So::Add, Co::ExclusiveScan, |_x| T::default(), "Sum over the lanes before this one.");
+
+pub fn subgroup_any(p: bool) -> bool {
+    p
+}
+pub mod subgroup_any {
+    pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
+        super::subgroup_op(super::So::Any, super::Co::Reduce, p)
+    }
+}
+pub fn subgroup_all(p: bool) -> bool {
+    p
+}
+pub mod subgroup_all {
+    pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
+        super::subgroup_op(super::So::All, super::Co::Reduce, p)
+    }
+}
+
+/// Bit i of the result is set when lane i's predicate holds.
+pub fn subgroup_ballot(p: bool) -> UVec4 {
+    UVec4::new(p as u32, 0, 0, 0)
+}
+pub mod subgroup_ballot {
+    pub fn ir(p: super::Val<bool>) -> super::Val<glam::UVec4> {
+        super::with(|c| {
+            c.uses_subgroups = true;
+            let result = c.expr(super::Expression::SubgroupBallotResult);
+            c.stmt(super::Statement::SubgroupBallot { result, predicate: Some(p.h) });
+            super::Val::from_handle(result)
+        })
+    }
+}
+
+/// The value of lane `lane` (a constant).
+pub fn subgroup_broadcast<T: Copy>(x: T, _lane: u32) -> T {
+    x
+}
+pub mod subgroup_broadcast {
+    pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
+        super::subgroup_gather(super::GatherMode::Broadcast(lane.h), x)
+    }
+}
+/// The value of the first active lane.
+pub fn subgroup_broadcast_first<T: Copy>(x: T) -> T {
+    x
+}
+pub mod subgroup_broadcast_first {
+    pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
+        super::subgroup_gather(super::GatherMode::BroadcastFirst, x)
+    }
+}
+/// The value of lane `lane` (any value, computed per lane).
+pub fn subgroup_shuffle<T: Copy>(x: T, _lane: u32) -> T {
+    x
+}
+pub mod subgroup_shuffle {
+    pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
+        super::subgroup_gather(super::GatherMode::Shuffle(lane.h), x)
+    }
+}
+
+/// Atomic compare-exchange returning the previous value (whether or not it was
+/// replaced); the same on host and GPU.
+pub fn atomic_compare_exchange(a: &AtomicU32, current: u32, new: u32) -> u32 {
+    match a.compare_exchange(current, new, Ordering::AcqRel, Ordering::Acquire) {
+        Ok(v) | Err(v) => v,
+    }
+}
+pub mod atomic_compare_exchange {
+    pub fn ir(a: super::Place<super::AtomicU32>, current: super::Val<u32>, new: super::Val<u32>) -> super::Val<u32> {
+        super::atomic_cmpxchg(a.ptr, naga::Scalar::U32, current.h, new.h)
+    }
+}
+
+fn atomic_cmpxchg<R>(ptr: naga::Handle<Expression>, scalar: naga::Scalar, cur: naga::Handle<Expression>, new: naga::Handle<Expression>) -> Val<R> {
+    with(|c| {
+        let ty = c.module.generate_predeclared_type(naga::PredeclaredType::AtomicCompareExchangeWeakResult(scalar));
+        let result = c.expr(Expression::AtomicResult { ty, comparison: true });
+        c.stmt(Statement::Atomic {
+            pointer: ptr,
+            fun: naga::AtomicFunction::Exchange { compare: Some(cur) },
+            value: new,
+            result: Some(result),
+        });
+        Val::from_handle(c.expr(Expression::AccessIndex { base: result, index: 0 }))
+    })
+}
+
+macro_rules! atomic_place {
+    ($atomic:ty, $int:ty, $scalar:expr) => {
+        impl Place<$atomic> {
+            fn rmw(self, fun: naga::AtomicFunction, v: Val<$int>) -> Val<$int> {
+                with(|c| {
+                    let ty = c.ty(naga::TypeInner::Scalar($scalar));
+                    let result = c.expr(Expression::AtomicResult { ty, comparison: false });
+                    c.stmt(Statement::Atomic { pointer: self.ptr, fun, value: v.h, result: Some(result) });
+                    Val::from_handle(result)
+                })
+            }
+            pub fn fetch_add(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::Add, v)
+            }
+            pub fn fetch_sub(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::Subtract, v)
+            }
+            pub fn fetch_min(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::Min, v)
+            }
+            pub fn fetch_max(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::Max, v)
+            }
+            pub fn fetch_and(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::And, v)
+            }
+            pub fn fetch_or(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::InclusiveOr, v)
+            }
+            pub fn fetch_xor(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::ExclusiveOr, v)
+            }
+            pub fn swap(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
+                self.rmw(naga::AtomicFunction::Exchange { compare: None }, v)
+            }
+            pub fn load(self, _o: Ordering) -> Val<$int> {
+                Val::from_handle(with(|c| c.expr(Expression::Load { pointer: self.ptr })))
+            }
+            pub fn store(self, v: Val<$int>, _o: Ordering) {
+                with(|c| c.stmt(Statement::Store { pointer: self.ptr, value: v.h }))
+            }
+        }
+    };
+}
+atomic_place!(AtomicU32, u32, naga::Scalar::U32);
+atomic_place!(AtomicI32, i32, naga::Scalar::I32);

@@ -1,0 +1,19 @@
+//! The IR builder: typed handles over naga IR that the rewritten kernel code calls.
+//! Front end (`cohort-macros`) → here → `naga::Module` → `emit` (WGSL, SPIR-V).
+
+pub(crate) mod builder;
+pub mod control;
+pub mod function;
+pub mod group;
+pub mod kernel;
+pub mod math;
+pub mod ops;
+pub mod types;
+pub mod val;
+
+pub use control::{diverged, if_else, BranchValue, and, break_, continue_, discard, for_range, for_range_rev, if_, if_value, loop_, or, return_, return_value, while_};
+pub use function::function;
+pub use kernel::{build_kernel, builtin, place, Buffer, BuiltKernel, Uniform, Workgroup};
+pub use ops::{cast, eq, ge, gt, le, lt, ne};
+pub use types::{struct_type, ConstValue, GpuType, HostRepr, MemberDesc, ScalarType};
+pub use val::{array, array_repeat, compose, field, field_init, index, konst, lit, name, place_field, place_index, zero, AsPlace, AutoDeref, FieldInit, ToVal, Place, RtArray, Val, Var};

@@ -1,0 +1,116 @@
+//! What one kernel specialisation is: the kernel's static description (from the
+//! `#[kernel]` attribute) plus the choices made at build time (coherence group level,
+//! workgroup size, how a warp is realised on this device). A `(kernel, Spec)` pair is
+//! the cache key of a compiled artifact.
+
+use cohort_runtime::DeviceInfo;
+
+/// The coherence group level: which invocations share a `group_share` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Group {
+    /// Every invocation is its own group (the value is computed by each invocation).
+    Thread,
+    /// 32 consecutive invocations, on every device.
+    Warp,
+    /// The whole workgroup of `n` invocations.
+    Block(u32),
+    /// Every invocation of the dispatch: the host computes the value.
+    Grid,
+}
+
+impl Group {
+    /// Parses the names used on the command line and in the attribute:
+    /// `thread`, `warp`, `block_256` / `block256`, `grid`.
+    pub fn parse(s: &str) -> Option<Group> {
+        let s = s.trim().to_ascii_lowercase();
+        match s.as_str() {
+            "thread" => Some(Group::Thread),
+            "warp" => Some(Group::Warp),
+            "grid" => Some(Group::Grid),
+            _ => {
+                let n = s.strip_prefix("block")?.trim_start_matches('_');
+                let n: u32 = n.parse().ok()?;
+                (n > 0 && n <= 1024).then_some(Group::Block(n))
+            }
+        }
+    }
+
+    pub fn label(self) -> String {
+        match self {
+            Group::Thread => "thread".into(),
+            Group::Warp => "warp".into(),
+            Group::Block(n) => format!("block_{n}"),
+            Group::Grid => "grid".into(),
+        }
+    }
+}
+
+/// Static facts about a kernel, written by `#[kernel]`.
+#[derive(Debug)]
+pub struct KernelInfo {
+    pub name: &'static str,
+    /// Where the kernel is defined, for error messages (compiler bugs are reported here).
+    pub file: &'static str,
+    pub line: u32,
+    pub column: u32,
+    /// Workgroup size from the attribute (used unless the group level is `Block(n)`).
+    pub workgroup_size: u32,
+    /// Group level from the attribute, used when the caller does not choose one.
+    pub group: Group,
+}
+
+/// One specialisation of a kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Spec {
+    pub group: Group,
+    pub workgroup_size: u32,
+    /// Realise `Warp` with subgroup broadcasts (the subgroup is exactly 32 wide) instead of
+    /// workgroup memory and a barrier.
+    pub warp_via_subgroup: bool,
+    /// Ask the driver for subgroups of exactly this size (Vulkan subgroup size control).
+    pub required_subgroup_size: Option<u32>,
+}
+
+pub const WARP: u32 = 32;
+
+impl Spec {
+    /// A device-independent specialisation: warps go through workgroup memory.
+    pub fn portable(info: &KernelInfo, group: Group) -> Spec {
+        let workgroup_size = match group {
+            Group::Block(n) => n,
+            _ => info.workgroup_size,
+        };
+        Spec { group, workgroup_size, warp_via_subgroup: false, required_subgroup_size: None }
+    }
+
+    /// The best specialisation for `device`: warps use subgroup broadcasts where the
+    /// device's subgroups are (or can be made) exactly 32 wide.
+    pub fn for_device(info: &KernelInfo, device: &DeviceInfo, group: Group) -> Spec {
+        let mut spec = Spec::portable(info, group);
+        if group == Group::Warp {
+            if device.subgroup_size == WARP && device.subgroup_size_min == device.subgroup_size_max {
+                spec.warp_via_subgroup = true;
+            } else if device.supports_required_subgroup_size
+                && (device.subgroup_size_min..=device.subgroup_size_max).contains(&WARP)
+            {
+                spec.warp_via_subgroup = true;
+                spec.required_subgroup_size = Some(WARP);
+            } else if device.subgroup_size == WARP {
+                spec.warp_via_subgroup = true;
+            }
+        }
+        spec
+    }
+
+    /// Suffix that names this specialisation in artifact and snapshot names.
+    pub fn suffix(&self) -> String {
+        let mut s = self.group.label();
+        if self.group == Group::Warp {
+            s.push_str(if self.warp_via_subgroup { "_subgroup" } else { "_shared" });
+        }
+        if !matches!(self.group, Group::Block(_)) {
+            s.push_str(&format!("_wg{}", self.workgroup_size));
+        }
+        s
+    }
+}

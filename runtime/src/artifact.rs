@@ -1,0 +1,46 @@
+//! What a compiled kernel hands to a backend: shader code for each backend plus the
+//! binding layout. Produced by the `cohort` language crate (front end → naga IR → emit),
+//! consumed by `Device::dispatch`. Backends never see naga IR or syn types, only this.
+
+/// How a kernel parameter is bound. Every binding lives in bind group / descriptor set 0,
+/// at the binding index given by `Binding::binding`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BindingKind {
+    /// `var<storage, read>`
+    StorageRead,
+    /// `var<storage, read_write>` (also used for atomics)
+    StorageReadWrite,
+    /// `var<uniform>`
+    Uniform,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Binding {
+    pub binding: u32,
+    pub kind: BindingKind,
+    /// Parameter name in the kernel source, for error messages.
+    pub name: String,
+}
+
+/// Device features a kernel needs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct KernelFeatures {
+    /// Uses subgroup operations.
+    pub subgroups: bool,
+    /// Needs the subgroup to be exactly this wide (Vulkan: requiredSubgroupSize).
+    pub required_subgroup_size: Option<u32>,
+}
+
+/// One compiled kernel specialisation.
+#[derive(Clone, Debug)]
+pub struct KernelArtifact {
+    /// Unique name of the specialisation (kernel name plus specialisation suffix); the
+    /// pipeline caches are keyed by it together with a hash of the code.
+    pub name: String,
+    pub entry_point: String,
+    pub wgsl: String,
+    pub spirv: Vec<u32>,
+    pub workgroup_size: [u32; 3],
+    pub bindings: Vec<Binding>,
+    pub features: KernelFeatures,
+}

@@ -1,0 +1,397 @@
+//! The public face of the runtime: `Device`, its buffers and dispatches, and `Batch`.
+//!
+//! A call goes: `Device::dispatch` / `Batch::dispatch` → `check_call` (argument count,
+//! binding sizes, workgroup counts; backend independent, so both backends reject the same
+//! mistakes with the same messages) → the backend's `record` (cached pipeline + resolved
+//! buffer handles, no GPU work yet) → the backend's `submit` (one command buffer, one
+//! queue submission, wait, timestamps). `Device::dispatch` is a batch of one.
+
+use std::sync::Arc;
+
+use crate::buffer::{alloc_size, storage_binding_size, uniform_binding_size};
+use crate::{
+    vulkan_backend, wgpu_backend, BackendKind, BindingKind, BufferArg, GpuBuffer, KernelArtifact,
+    Result, RuntimeError,
+};
+
+/// What a device offers, as kernels and their launchers need to know it.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub backend: BackendKind,
+    pub adapter_name: String,
+    pub driver: String,
+    pub subgroup_size_min: u32,
+    pub subgroup_size_max: u32,
+    /// The subgroup size a compute pipeline gets when the kernel does not require one.
+    pub subgroup_size: u32,
+    /// Whether `KernelFeatures::required_subgroup_size` can pick a size in
+    /// `[subgroup_size_min, subgroup_size_max]` (Vulkan subgroup size control).
+    pub supports_required_subgroup_size: bool,
+    /// Whether dispatches report `DispatchStats::gpu_time_ns`.
+    pub timestamps: bool,
+    /// The largest workgroup count valid in every dimension (some drivers allow more in x).
+    pub max_workgroups_per_dim: u32,
+    pub max_storage_buffer_binding_size: u64,
+}
+
+/// Device limits the host-side checks need; filled by each backend from its own API.
+#[derive(Clone, Debug)]
+pub(crate) struct Limits {
+    pub max_workgroups: [u32; 3],
+    pub max_workgroup_size: [u32; 3],
+    pub max_invocations: u32,
+    pub max_storage_binding: u64,
+    pub max_uniform_binding: u64,
+    pub subgroups: bool,
+}
+
+/// How many workgroups to launch.
+#[derive(Clone, Copy, Debug)]
+pub enum Dispatch<'a> {
+    Groups([u32; 3]),
+    /// Workgroup counts read by the GPU from `args[offset_elems..offset_elems + 3]`, so a
+    /// previous dispatch can size this one. The counts are not checked against the limits.
+    Indirect {
+        args: &'a GpuBuffer<u32>,
+        offset_elems: usize,
+    },
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DispatchStats {
+    /// Time between GPU timestamps written before and after the dispatch, when the device
+    /// supports timestamps on its compute queue.
+    pub gpu_time_ns: Option<u64>,
+}
+
+#[derive(Clone)]
+enum Inner {
+    Wgpu(Arc<wgpu_backend::WgpuDevice>),
+    Vulkan(Arc<vulkan_backend::VkDevice>),
+}
+
+/// A GPU device on one backend. Cloning is cheap and shares the device.
+#[derive(Clone)]
+pub struct Device {
+    inner: Inner,
+}
+
+impl std::fmt::Debug for Device {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let info = self.info();
+        write!(
+            f,
+            "Device({}: {} / {})",
+            info.backend.name(),
+            info.adapter_name,
+            info.driver
+        )
+    }
+}
+
+impl Device {
+    pub fn new(kind: BackendKind) -> Result<Device> {
+        let inner = match kind {
+            BackendKind::Wgpu => Inner::Wgpu(Arc::new(wgpu_backend::WgpuDevice::new()?)),
+            BackendKind::Vulkan => Inner::Vulkan(Arc::new(vulkan_backend::VkDevice::new()?)),
+        };
+        Ok(Device { inner })
+    }
+
+    /// Raw Vulkan first (required subgroup sizes, no WGSL limits), then wgpu.
+    pub fn best() -> Result<Device> {
+        Device::new(BackendKind::Vulkan).or_else(|vk_err| {
+            Device::new(BackendKind::Wgpu).map_err(|wgpu_err| match (vk_err, wgpu_err) {
+                (
+                    RuntimeError::NoAdapter { detail: vk, .. },
+                    RuntimeError::NoAdapter { detail: wg, .. },
+                ) => RuntimeError::NoAdapter {
+                    backend: BackendKind::Vulkan,
+                    detail: format!("{vk}; the wgpu backend found none either: {wg}"),
+                },
+                (vk_err, _) => vk_err,
+            })
+        })
+    }
+
+    /// A device for a test, or `None` (with a "skipping: ..." line) when the machine has no
+    /// adapter for `kind`. With `CI=true` a missing adapter panics instead: CI must fail
+    /// rather than silently skip every GPU test. Errors other than a missing adapter always
+    /// panic, since they are bugs rather than an absent driver.
+    pub fn for_tests(kind: BackendKind) -> Option<Device> {
+        match Device::new(kind) {
+            Ok(device) => Some(device),
+            Err(err @ RuntimeError::NoAdapter { .. }) => {
+                if std::env::var("CI").as_deref() == Ok("true") {
+                    panic!(
+                        "CI=true and the {} backend has no adapter: {err}",
+                        kind.name()
+                    );
+                }
+                println!("skipping: {err}");
+                None
+            }
+            Err(err) => panic!("could not create a {} device: {err}", kind.name()),
+        }
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        match &self.inner {
+            Inner::Wgpu(d) => &d.info,
+            Inner::Vulkan(d) => &d.info,
+        }
+    }
+
+    /// A zero-filled buffer of `len` elements.
+    pub fn alloc<T: bytemuck::Pod>(&self, len: usize) -> Result<GpuBuffer<T>> {
+        let bytes = alloc_size(elem_bytes::<T>(len));
+        let raw = match &self.inner {
+            Inner::Wgpu(d) => d.create_buffer(bytes, &[])?,
+            Inner::Vulkan(d) => d.create_buffer(bytes, &[])?,
+        };
+        Ok(GpuBuffer::new(raw, len))
+    }
+
+    pub fn upload<T: bytemuck::Pod>(&self, data: &[T]) -> Result<GpuBuffer<T>> {
+        let init: &[u8] = bytemuck::cast_slice(data);
+        let bytes = alloc_size(init.len() as u64);
+        let raw = match &self.inner {
+            Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
+            Inner::Vulkan(d) => d.create_buffer(bytes, init)?,
+        };
+        Ok(GpuBuffer::new(raw, data.len()))
+    }
+
+    /// Overwrites `buf[first..first + data.len()]`. Ordered before any later dispatch or read.
+    pub fn write<T: bytemuck::Pod>(
+        &self,
+        buf: &GpuBuffer<T>,
+        first: usize,
+        data: &[T],
+    ) -> Result<()> {
+        if first
+            .checked_add(data.len())
+            .is_none_or(|end| end > buf.len())
+        {
+            return Err(RuntimeError::WriteOutOfRange {
+                first,
+                count: data.len(),
+                len: buf.len(),
+            });
+        }
+        if data.is_empty() {
+            return Ok(());
+        }
+        let offset = elem_bytes::<T>(first);
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        match &self.inner {
+            Inner::Wgpu(d) => d.write(&buf.raw, offset, bytes),
+            Inner::Vulkan(d) => d.write(&buf.raw, offset, bytes),
+        }
+    }
+
+    /// Copies the whole buffer back to the host, after all previously submitted work.
+    pub fn read<T: bytemuck::Pod>(&self, buf: &GpuBuffer<T>) -> Result<Vec<T>> {
+        let mut out = vec![T::zeroed(); buf.len()];
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        match &self.inner {
+            Inner::Wgpu(d) => d.read(&buf.raw, dst)?,
+            Inner::Vulkan(d) => d.read(&buf.raw, dst)?,
+        }
+        Ok(out)
+    }
+
+    /// Runs one kernel and waits for it.
+    pub fn dispatch(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: Dispatch<'_>,
+    ) -> Result<DispatchStats> {
+        let mut batch = self.batch();
+        batch.dispatch(kernel, args, dispatch)?;
+        Ok(batch.submit()?.pop().unwrap_or_default())
+    }
+
+    /// Starts recording dispatches that are submitted together, in order, each seeing the
+    /// writes of the ones before it.
+    pub fn batch(&self) -> Batch<'_> {
+        let pending = match &self.inner {
+            Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new()),
+            Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new()),
+        };
+        Batch { pending }
+    }
+
+    /// Vulkan validation-layer errors and warnings collected since the last call (wgpu:
+    /// errors wgpu reported outside any operation of this crate).
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        match &self.inner {
+            Inner::Wgpu(d) => d.take_messages(),
+            Inner::Vulkan(d) => d.take_messages(),
+        }
+    }
+
+    /// How many pipelines this device has compiled and cached.
+    pub fn cached_pipeline_count(&self) -> usize {
+        match &self.inner {
+            Inner::Wgpu(d) => d.pipelines.len(),
+            Inner::Vulkan(d) => d.pipelines.len(),
+        }
+    }
+}
+
+fn elem_bytes<T>(len: usize) -> u64 {
+    (len as u64) * std::mem::size_of::<T>() as u64
+}
+
+enum Pending<'d> {
+    Wgpu(&'d wgpu_backend::WgpuDevice, Vec<wgpu_backend::Cmd>),
+    Vulkan(&'d vulkan_backend::VkDevice, Vec<vulkan_backend::Cmd>),
+}
+
+/// Dispatches recorded for one submission. Nothing reaches the GPU before `submit`.
+pub struct Batch<'d> {
+    pending: Pending<'d>,
+}
+
+impl Batch<'_> {
+    pub fn dispatch(
+        &mut self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: Dispatch<'_>,
+    ) -> Result<()> {
+        match &mut self.pending {
+            Pending::Wgpu(d, cmds) => {
+                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
+                cmds.push(d.record(kernel, args, &dispatch)?);
+            }
+            Pending::Vulkan(d, cmds) => {
+                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
+                cmds.push(d.record(kernel, args, &dispatch)?);
+            }
+        }
+        Ok(())
+    }
+
+    pub fn len(&self) -> usize {
+        match &self.pending {
+            Pending::Wgpu(_, cmds) => cmds.len(),
+            Pending::Vulkan(_, cmds) => cmds.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Submits everything as one command buffer and waits; one `DispatchStats` per dispatch.
+    pub fn submit(self) -> Result<Vec<DispatchStats>> {
+        match self.pending {
+            Pending::Wgpu(_, cmds) if cmds.is_empty() => Ok(Vec::new()),
+            Pending::Vulkan(_, cmds) if cmds.is_empty() => Ok(Vec::new()),
+            Pending::Wgpu(d, cmds) => d.submit(&cmds),
+            Pending::Vulkan(d, cmds) => d.submit(&cmds),
+        }
+    }
+}
+
+/// Host-side checks shared by both backends, done before any GPU object is touched.
+fn check_call(
+    info: &DeviceInfo,
+    limits: &Limits,
+    kernel: &KernelArtifact,
+    args: &[BufferArg<'_>],
+    dispatch: &Dispatch<'_>,
+) -> Result<()> {
+    let name = || kernel.name.clone();
+    if args.len() != kernel.bindings.len() {
+        let params: Vec<&str> = kernel.bindings.iter().map(|b| b.name.as_str()).collect();
+        return Err(RuntimeError::ArgumentCount {
+            kernel: name(),
+            expected: kernel.bindings.len(),
+            got: args.len(),
+            params: params.join(", "),
+        });
+    }
+    for (binding, arg) in kernel.bindings.iter().zip(args) {
+        let (kind, size, max) = match binding.kind {
+            BindingKind::Uniform => (
+                "uniform",
+                uniform_binding_size(arg.size_bytes),
+                limits.max_uniform_binding,
+            ),
+            BindingKind::StorageRead | BindingKind::StorageReadWrite => (
+                "storage",
+                storage_binding_size(arg.size_bytes),
+                limits.max_storage_binding,
+            ),
+        };
+        if size > max {
+            return Err(RuntimeError::BindingTooLarge {
+                kernel: name(),
+                param: binding.name.clone(),
+                kind,
+                size,
+                max,
+            });
+        }
+    }
+    for (i, (bi, ai)) in kernel.bindings.iter().zip(args).enumerate() {
+        for (bj, aj) in kernel.bindings.iter().zip(args).skip(i + 1) {
+            let writable = bi.kind == BindingKind::StorageReadWrite
+                || bj.kind == BindingKind::StorageReadWrite;
+            if writable && ai.raw.same(aj.raw) {
+                return Err(RuntimeError::AliasedArguments {
+                    kernel: name(),
+                    first: bi.name.clone(),
+                    second: bj.name.clone(),
+                });
+            }
+        }
+    }
+    if kernel.features.subgroups && !limits.subgroups {
+        return Err(RuntimeError::MissingFeature {
+            kernel: name(),
+            backend: info.backend,
+            feature: "subgroup operations",
+        });
+    }
+    let wg = kernel.workgroup_size;
+    let invocations = wg.iter().map(|&d| d as u64).product::<u64>();
+    if (0..3).any(|d| wg[d] > limits.max_workgroup_size[d])
+        || invocations > limits.max_invocations as u64
+    {
+        return Err(RuntimeError::WorkgroupTooLarge {
+            kernel: name(),
+            size: wg,
+            max_size: limits.max_workgroup_size,
+            max_invocations: limits.max_invocations,
+        });
+    }
+    match dispatch {
+        Dispatch::Groups(groups) => {
+            if (0..3).any(|d| groups[d] > limits.max_workgroups[d]) {
+                return Err(RuntimeError::TooManyWorkgroups {
+                    kernel: name(),
+                    groups: *groups,
+                    max: limits.max_workgroups,
+                });
+            }
+        }
+        Dispatch::Indirect { args, offset_elems } => {
+            if offset_elems
+                .checked_add(3)
+                .is_none_or(|end| end > args.len())
+            {
+                return Err(RuntimeError::IndirectOutOfRange {
+                    kernel: name(),
+                    offset_elems: *offset_elems,
+                    len: args.len(),
+                });
+            }
+        }
+    }
+    Ok(())
+}

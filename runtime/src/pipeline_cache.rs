@@ -1,0 +1,77 @@
+//! Per-device map from a kernel artifact to its compiled pipeline. Every dispatch looks its
+//! kernel up here first, so compiling (WGSL parse or SPIR-V → driver pipeline) happens once
+//! per device and artifact. The key is the artifact name plus a hash of everything that
+//! shapes the pipeline, so two specialisations that share a name but differ in code never
+//! alias.
+
+use std::collections::hash_map::DefaultHasher;
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Mutex};
+
+use crate::{KernelArtifact, Result};
+
+/// Which of the artifact's two codes a backend consumes; only that one goes into the key, so
+/// a change to the other backend's code does not invalidate this backend's pipeline.
+#[derive(Clone, Copy)]
+pub(crate) enum Code {
+    Wgsl,
+    Spirv,
+}
+
+fn code_hash(kernel: &KernelArtifact, code: Code) -> u64 {
+    let mut h = DefaultHasher::new();
+    match code {
+        Code::Wgsl => kernel.wgsl.hash(&mut h),
+        Code::Spirv => kernel.spirv.hash(&mut h),
+    }
+    kernel.entry_point.hash(&mut h);
+    kernel.bindings.hash(&mut h);
+    kernel.features.hash(&mut h);
+    h.finish()
+}
+
+pub(crate) struct PipelineCache<P> {
+    code: Code,
+    map: Mutex<HashMap<(String, u64), Arc<P>>>,
+}
+
+impl<P> PipelineCache<P> {
+    pub(crate) fn new(code: Code) -> Self {
+        PipelineCache {
+            code,
+            map: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// Returns the cached pipeline or builds it with `create`. The lock is held while
+    /// compiling so that two threads dispatching the same new kernel compile it once.
+    pub(crate) fn get_or_create(
+        &self,
+        kernel: &KernelArtifact,
+        create: impl FnOnce() -> Result<P>,
+    ) -> Result<Arc<P>> {
+        let key = (kernel.name.clone(), code_hash(kernel, self.code));
+        let mut map = self.map.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = map.get(&key) {
+            return Ok(p.clone());
+        }
+        let p = Arc::new(create()?);
+        map.insert(key, p.clone());
+        Ok(p)
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.map.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    /// Empties the cache so the owner can destroy the pipelines before its device.
+    pub(crate) fn drain(&self) -> Vec<Arc<P>> {
+        self.map
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .drain()
+            .map(|(_, p)| p)
+            .collect()
+    }
+}

@@ -1,0 +1,788 @@
+//! The raw Vulkan backend (through `ash`): consumes `KernelArtifact::spirv`. It exists next
+//! to wgpu for what wgpu cannot do: pin a pipeline's subgroup size, and run SPIR-V as the
+//! compiler emitted it.
+//!
+//! Ownership: `Shared` (see `vulkan_init`, which opens the device) holds the instance, the
+//! logical device and the memory allocator and is destroyed last; every `Buffer` holds an
+//! `Arc<Shared>`, so buffers may outlive the `VkDevice` that made them. `VkDevice` adds the
+//! queue, the command pool and the pipeline cache. All GPU work goes through `VkDevice::run`:
+//! one command buffer, one submission, wait on a fence, reset the pool. Device-local memory
+//! is only touched by copy commands from/to host-visible staging buffers, so there is one
+//! upload path on every GPU.
+
+use std::ffi::CString;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use crate::buffer::{storage_binding_size, uniform_binding_size, RawBuffer};
+use crate::device::Limits;
+use crate::error::VkContext;
+use crate::pipeline_cache::{Code, PipelineCache};
+use crate::vulkan_init::{self, lock, Opened, Shared, SubgroupControl};
+use crate::{
+    BackendKind, BindingKind, BufferArg, DeviceInfo, Dispatch, DispatchStats, KernelArtifact,
+    Result, RuntimeError,
+};
+
+const BACKEND: BackendKind = BackendKind::Vulkan;
+
+/// Distinguishes devices so a buffer from one device is never bound on another.
+static NEXT_DEVICE_ID: AtomicU64 = AtomicU64::new(1);
+
+const BUFFER_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+        | vk::BufferUsageFlags::UNIFORM_BUFFER.as_raw()
+        | vk::BufferUsageFlags::INDIRECT_BUFFER.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_SRC.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+pub(crate) struct Buffer {
+    device_id: u64,
+    shared: Arc<Shared>,
+    raw: vk::Buffer,
+    allocation: Option<Allocation>,
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(allocation) = self.allocation.take() {
+            let _ = lock(&self.shared.allocator).free(allocation);
+        }
+        unsafe { self.shared.device.destroy_buffer(self.raw, None) };
+    }
+}
+
+pub(crate) struct Pipeline {
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+}
+
+/// One recorded dispatch, holding everything it binds so it outlives the caller's borrows.
+pub(crate) struct Cmd {
+    kernel: String,
+    pipeline: Arc<Pipeline>,
+    /// (binding index, descriptor type, buffer, bound bytes)
+    bindings: Vec<(u32, vk::DescriptorType, Arc<Buffer>, u64)>,
+    groups: Groups,
+}
+
+enum Groups {
+    Direct([u32; 3]),
+    Indirect(Arc<Buffer>, u64),
+}
+
+/// Serialises queue access (Vulkan requires external synchronisation of queues and
+/// command pools); one submission is in flight at a time.
+struct Submitter {
+    queue: vk::Queue,
+    pool: vk::CommandPool,
+    fence: vk::Fence,
+}
+
+impl Submitter {
+    fn new(device: &ash::Device, queue_family: u32) -> Result<Self> {
+        unsafe {
+            let queue = device.get_device_queue(queue_family, 0);
+            let pool = device
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default()
+                        .flags(vk::CommandPoolCreateFlags::TRANSIENT)
+                        .queue_family_index(queue_family),
+                    None,
+                )
+                .vk("vkCreateCommandPool")?;
+            match device.create_fence(&vk::FenceCreateInfo::default(), None) {
+                Ok(fence) => Ok(Submitter { queue, pool, fence }),
+                Err(e) => {
+                    device.destroy_command_pool(pool, None);
+                    Err(RuntimeError::Vulkan {
+                        call: "vkCreateFence",
+                        result: e,
+                    })
+                }
+            }
+        }
+    }
+}
+
+pub(crate) struct VkDevice {
+    id: u64,
+    pub(crate) info: DeviceInfo,
+    pub(crate) limits: Limits,
+    pub(crate) pipelines: PipelineCache<Pipeline>,
+    shared: Arc<Shared>,
+    submitter: Mutex<Submitter>,
+    subgroup_control: SubgroupControl,
+    timestamp_valid_bits: u32,
+    timestamp_period_ns: f64,
+}
+
+impl Drop for VkDevice {
+    fn drop(&mut self) {
+        let device = &self.shared.device;
+        let s = lock(&self.submitter);
+        unsafe {
+            let _ = device.device_wait_idle();
+            // No batch can outlive its `&Device`, so these are the last references.
+            for p in self.pipelines.drain() {
+                device.destroy_pipeline(p.pipeline, None);
+                device.destroy_pipeline_layout(p.layout, None);
+                device.destroy_descriptor_set_layout(p.set_layout, None);
+            }
+            device.destroy_command_pool(s.pool, None);
+            device.destroy_fence(s.fence, None);
+        }
+    }
+}
+
+impl VkDevice {
+    pub(crate) fn new() -> Result<Self> {
+        let Opened { shared, desc } = vulkan_init::open()?;
+        // From here, dropping `shared` on an error path destroys the device and instance.
+        let shared = Arc::new(shared);
+        let submitter = Submitter::new(&shared.device, desc.queue_family)?;
+        Ok(VkDevice {
+            id: NEXT_DEVICE_ID.fetch_add(1, Ordering::Relaxed),
+            info: desc.info,
+            limits: desc.limits,
+            pipelines: PipelineCache::new(Code::Spirv),
+            shared,
+            submitter: Mutex::new(submitter),
+            subgroup_control: desc.subgroup_control,
+            timestamp_valid_bits: desc.timestamp_valid_bits,
+            timestamp_period_ns: desc.timestamp_period_ns,
+        })
+    }
+
+    pub(crate) fn take_messages(&self) -> Vec<String> {
+        std::mem::take(&mut *lock(&self.shared.messages))
+    }
+
+    /// Validation messages logged since `mark` (a length of the list), without draining
+    /// them, to attach to an error.
+    fn messages_since(&self, mark: usize) -> Vec<String> {
+        lock(&self.shared.messages)
+            .iter()
+            .skip(mark)
+            .cloned()
+            .collect()
+    }
+
+    fn message_count(&self) -> usize {
+        lock(&self.shared.messages).len()
+    }
+
+    fn own<'a>(&self, raw: &'a RawBuffer) -> Option<&'a Arc<Buffer>> {
+        match raw {
+            RawBuffer::Vulkan(b) if b.device_id == self.id => Some(b),
+            _ => None,
+        }
+    }
+
+    fn new_buffer(
+        &self,
+        bytes: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Buffer> {
+        let device = &self.shared.device;
+        let alloc_err = |detail: String| RuntimeError::Allocation {
+            backend: BACKEND,
+            bytes,
+            detail,
+        };
+        let info = vk::BufferCreateInfo::default()
+            .size(bytes)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None) }
+            .map_err(|e| alloc_err(format!("vkCreateBuffer failed: {e}")))?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocation = lock(&self.shared.allocator).allocate(&AllocationCreateDesc {
+            name: "cohort buffer",
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        // From here the buffer owns `raw`, so every early return frees it.
+        let mut buffer = Buffer {
+            device_id: self.id,
+            shared: self.shared.clone(),
+            raw,
+            allocation: None,
+        };
+        let allocation = allocation.map_err(|e| alloc_err(e.to_string()))?;
+        let bound =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        buffer.allocation = Some(allocation);
+        bound.map_err(|e| alloc_err(format!("vkBindBufferMemory failed: {e}")))?;
+        Ok(buffer)
+    }
+
+    fn staging(&self, bytes: u64, location: MemoryLocation) -> Result<Buffer> {
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        self.new_buffer(bytes, usage, location)
+    }
+
+    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
+    /// start and the rest is zeroed.
+    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        let buffer = self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?;
+        if init.is_empty() {
+            self.run(|d, cb| unsafe { d.cmd_fill_buffer(cb, buffer.raw, 0, vk::WHOLE_SIZE, 0) })?;
+        } else {
+            let mut staging = self.staging(bytes, MemoryLocation::CpuToGpu)?;
+            let mapped = mapped_bytes(&mut staging)?;
+            mapped[..init.len()].copy_from_slice(init);
+            mapped[init.len()..bytes as usize].fill(0);
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: bytes,
+            };
+            self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })?;
+        }
+        Ok(RawBuffer::Vulkan(Arc::new(buffer)))
+    }
+
+    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
+        let mut staging = self.staging(bytes.len() as u64, MemoryLocation::CpuToGpu)?;
+        mapped_bytes(&mut staging)?[..bytes.len()].copy_from_slice(bytes);
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: offset,
+            size: bytes.len() as u64,
+        };
+        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })
+    }
+
+    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
+        if dst.is_empty() {
+            return Ok(());
+        }
+        let mut staging = self.staging(dst.len() as u64, MemoryLocation::GpuToCpu)?;
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: dst.len() as u64,
+        };
+        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, buffer.raw, staging.raw, &[region]) })?;
+        let n = dst.len();
+        dst.copy_from_slice(&mapped_bytes(&mut staging)?[..n]);
+        Ok(())
+    }
+
+    /// Records `record` into a fresh command buffer between full memory barriers, submits
+    /// it and waits. The leading barrier makes earlier submissions' writes visible; the
+    /// trailing one makes this submission's writes visible to the host (staging reads).
+    fn run(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
+        let device = &self.shared.device;
+        let s = lock(&self.submitter);
+        let result = (|| unsafe {
+            let cb = device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(s.pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .vk("vkAllocateCommandBuffers")?[0];
+            device
+                .begin_command_buffer(
+                    cb,
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .vk("vkBeginCommandBuffer")?;
+            let all = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
+            barrier(
+                device,
+                cb,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::AccessFlags::MEMORY_WRITE,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                all,
+            );
+            record(device, cb);
+            barrier(
+                device,
+                cb,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::AccessFlags::MEMORY_WRITE,
+                vk::PipelineStageFlags::HOST,
+                vk::AccessFlags::HOST_READ,
+            );
+            device.end_command_buffer(cb).vk("vkEndCommandBuffer")?;
+            let cbs = [cb];
+            let submit = vk::SubmitInfo::default().command_buffers(&cbs);
+            device
+                .queue_submit(s.queue, &[submit], s.fence)
+                .vk("vkQueueSubmit")?;
+            device
+                .wait_for_fences(&[s.fence], true, u64::MAX)
+                .vk("vkWaitForFences")?;
+            Ok(())
+        })();
+        unsafe {
+            let _ = device.reset_fences(&[s.fence]);
+            let _ = device.reset_command_pool(s.pool, vk::CommandPoolResetFlags::empty());
+        }
+        result
+    }
+
+    pub(crate) fn record(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        let pipeline = self
+            .pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))?;
+        let foreign = |param: &str| RuntimeError::ForeignBuffer {
+            kernel: kernel.name.clone(),
+            param: param.to_string(),
+        };
+        let mut bindings = Vec::with_capacity(args.len());
+        for (b, arg) in kernel.bindings.iter().zip(args) {
+            let buffer = self.own(arg.raw).ok_or_else(|| foreign(&b.name))?;
+            let (ty, size) = match b.kind {
+                BindingKind::Uniform => (
+                    vk::DescriptorType::UNIFORM_BUFFER,
+                    uniform_binding_size(arg.size_bytes),
+                ),
+                BindingKind::StorageRead | BindingKind::StorageReadWrite => (
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    storage_binding_size(arg.size_bytes),
+                ),
+            };
+            bindings.push((b.binding, ty, buffer.clone(), size));
+        }
+        let groups = match dispatch {
+            Dispatch::Groups(g) => Groups::Direct(*g),
+            Dispatch::Indirect { args, offset_elems } => {
+                let buffer = self
+                    .own(&args.raw)
+                    .ok_or_else(|| foreign("indirect arguments"))?;
+                Groups::Indirect(buffer.clone(), (*offset_elems as u64) * 4)
+            }
+        };
+        Ok(Cmd {
+            kernel: kernel.name.clone(),
+            pipeline,
+            bindings,
+            groups,
+        })
+    }
+
+    /// The subgroup size chained into the pipeline, after checking the device can do it.
+    fn required_subgroup_size(&self, kernel: &KernelArtifact) -> Result<Option<u32>> {
+        let Some(n) = kernel.features.required_subgroup_size else {
+            return Ok(None);
+        };
+        let sc = &self.subgroup_control;
+        let problem = if !sc.enabled {
+            Some(
+                "the device does not support subgroup size control for compute shaders".to_string(),
+            )
+        } else if !n.is_power_of_two() || n < sc.min || n > sc.max {
+            Some(format!(
+                "the device supports sizes {}..={} (powers of two)",
+                sc.min, sc.max
+            ))
+        } else {
+            None
+        };
+        match problem {
+            Some(detail) => Err(RuntimeError::SubgroupSize {
+                kernel: kernel.name.clone(),
+                backend: BACKEND,
+                required: n,
+                detail,
+            }),
+            None => Ok(Some(n)),
+        }
+    }
+
+    fn create_pipeline(&self, kernel: &KernelArtifact) -> Result<Pipeline> {
+        let device = &self.shared.device;
+        let mark = self.message_count();
+        let fail = |what: String| {
+            let mut detail = what;
+            for m in self.messages_since(mark) {
+                detail.push_str("\n  ");
+                detail.push_str(&m);
+            }
+            RuntimeError::ShaderCompilation {
+                kernel: kernel.name.clone(),
+                backend: BACKEND,
+                detail,
+            }
+        };
+        if kernel.spirv.first() != Some(&0x0723_0203) {
+            return Err(fail(
+                "the artifact has no SPIR-V code (missing magic number)".into(),
+            ));
+        }
+        let entry = CString::new(kernel.entry_point.as_str())
+            .map_err(|_| fail("the entry point name contains a NUL byte".into()))?;
+        let required = self.required_subgroup_size(kernel)?;
+
+        let layout_bindings: Vec<vk::DescriptorSetLayoutBinding> = kernel
+            .bindings
+            .iter()
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b.binding)
+                    .descriptor_type(match b.kind {
+                        BindingKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
+                        _ => vk::DescriptorType::STORAGE_BUFFER,
+                    })
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+
+        // Handles created so far, destroyed if a later step fails.
+        let mut module = vk::ShaderModule::null();
+        let mut set_layout = vk::DescriptorSetLayout::null();
+        let mut layout = vk::PipelineLayout::null();
+        let result = (|| unsafe {
+            module = device
+                .create_shader_module(
+                    &vk::ShaderModuleCreateInfo::default().code(&kernel.spirv),
+                    None,
+                )
+                .map_err(|e| fail(format!("vkCreateShaderModule failed: {e}")))?;
+            set_layout = device
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                    None,
+                )
+                .map_err(|e| fail(format!("vkCreateDescriptorSetLayout failed: {e}")))?;
+            let set_layouts = [set_layout];
+            layout = device
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts),
+                    None,
+                )
+                .map_err(|e| fail(format!("vkCreatePipelineLayout failed: {e}")))?;
+            let mut required_info =
+                vk::PipelineShaderStageRequiredSubgroupSizeCreateInfo::default();
+            let mut stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(&entry);
+            if let Some(n) = required {
+                required_info = required_info.required_subgroup_size(n);
+                stage = stage.push_next(&mut required_info);
+                // Full subgroups make "every subgroup has n lanes" true for kernels whose
+                // workgroup width is a multiple of n, which is what pinning the size is for.
+                let sc = &self.subgroup_control;
+                let invocations: u64 = kernel.workgroup_size.iter().map(|&d| d as u64).product();
+                if sc.full_subgroups
+                    && kernel.workgroup_size[0] % n == 0
+                    && invocations <= n as u64 * sc.max_workgroup_subgroups as u64
+                {
+                    stage = stage.flags(vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS);
+                }
+            }
+            let info = vk::ComputePipelineCreateInfo::default()
+                .stage(stage)
+                .layout(layout);
+            let pipeline = device
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| fail(format!("vkCreateComputePipelines failed: {e}")))?[0];
+            Ok(pipeline)
+        })();
+        unsafe {
+            if module != vk::ShaderModule::null() {
+                device.destroy_shader_module(module, None);
+            }
+        }
+        match result {
+            Ok(pipeline) => Ok(Pipeline {
+                pipeline,
+                layout,
+                set_layout,
+            }),
+            Err(e) => {
+                unsafe {
+                    if layout != vk::PipelineLayout::null() {
+                        device.destroy_pipeline_layout(layout, None);
+                    }
+                    if set_layout != vk::DescriptorSetLayout::null() {
+                        device.destroy_descriptor_set_layout(set_layout, None);
+                    }
+                }
+                Err(e)
+            }
+        }
+    }
+
+    pub(crate) fn submit(&self, cmds: &[Cmd]) -> Result<Vec<DispatchStats>> {
+        let device = &self.shared.device;
+        let n = cmds.len() as u32;
+        let fail = |e: RuntimeError| {
+            let mut names: Vec<&str> = cmds.iter().map(|c| c.kernel.as_str()).collect();
+            names.dedup();
+            RuntimeError::Dispatch {
+                kernel: names.join(", "),
+                backend: BACKEND,
+                detail: e.to_string(),
+            }
+        };
+        let count = |ty| {
+            cmds.iter()
+                .flat_map(|c| &c.bindings)
+                .filter(|b| b.1 == ty)
+                .count() as u32
+        };
+        // A pool per submission, destroyed after the wait: nothing to track or leak.
+        let pool_sizes = [
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: count(vk::DescriptorType::STORAGE_BUFFER).max(1),
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_BUFFER,
+                descriptor_count: count(vk::DescriptorType::UNIFORM_BUFFER).max(1),
+            },
+        ];
+        let descriptor_pool = unsafe {
+            device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(n)
+                    .pool_sizes(&pool_sizes),
+                None,
+            )
+        }
+        .vk("vkCreateDescriptorPool")
+        .map_err(fail)?;
+        let query_pool = if self.info.timestamps {
+            let created = unsafe {
+                device.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::TIMESTAMP)
+                        .query_count(2 * n),
+                    None,
+                )
+            };
+            match created {
+                Ok(q) => Some(q),
+                Err(e) => {
+                    unsafe { device.destroy_descriptor_pool(descriptor_pool, None) };
+                    return Err(fail(RuntimeError::Vulkan {
+                        call: "vkCreateQueryPool",
+                        result: e,
+                    }));
+                }
+            }
+        } else {
+            None
+        };
+
+        let result = (|| -> Result<Vec<DispatchStats>> {
+            let set_layouts: Vec<vk::DescriptorSetLayout> =
+                cmds.iter().map(|c| c.pipeline.set_layout).collect();
+            let sets = unsafe {
+                device.allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(descriptor_pool)
+                        .set_layouts(&set_layouts),
+                )
+            }
+            .vk("vkAllocateDescriptorSets")?;
+            let buffer_infos: Vec<Vec<vk::DescriptorBufferInfo>> = cmds
+                .iter()
+                .map(|c| {
+                    c.bindings
+                        .iter()
+                        .map(|(_, _, buffer, size)| vk::DescriptorBufferInfo {
+                            buffer: buffer.raw,
+                            offset: 0,
+                            range: *size,
+                        })
+                        .collect()
+                })
+                .collect();
+            let writes: Vec<vk::WriteDescriptorSet> = cmds
+                .iter()
+                .zip(&sets)
+                .zip(&buffer_infos)
+                .flat_map(|((c, &set), infos)| {
+                    c.bindings
+                        .iter()
+                        .zip(infos)
+                        .map(move |((binding, ty, _, _), info)| {
+                            vk::WriteDescriptorSet::default()
+                                .dst_set(set)
+                                .dst_binding(*binding)
+                                .descriptor_type(*ty)
+                                .buffer_info(std::slice::from_ref(info))
+                        })
+                })
+                .collect();
+            unsafe { device.update_descriptor_sets(&writes, &[]) };
+
+            self.run(|d, cb| unsafe {
+                if let Some(q) = query_pool {
+                    d.cmd_reset_query_pool(cb, q, 0, 2 * n);
+                }
+                for (i, (cmd, &set)) in cmds.iter().zip(&sets).enumerate() {
+                    if i > 0 {
+                        // Each dispatch sees the previous ones' writes, including
+                        // indirect arguments they computed.
+                        barrier(
+                            d,
+                            cb,
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            vk::AccessFlags::SHADER_WRITE,
+                            vk::PipelineStageFlags::COMPUTE_SHADER
+                                | vk::PipelineStageFlags::DRAW_INDIRECT,
+                            vk::AccessFlags::SHADER_READ
+                                | vk::AccessFlags::SHADER_WRITE
+                                | vk::AccessFlags::INDIRECT_COMMAND_READ,
+                        );
+                    }
+                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, cmd.pipeline.pipeline);
+                    d.cmd_bind_descriptor_sets(
+                        cb,
+                        vk::PipelineBindPoint::COMPUTE,
+                        cmd.pipeline.layout,
+                        0,
+                        &[set],
+                        &[],
+                    );
+                    // COMPUTE_SHADER rather than TOP_OF_PIPE: the begin stamp waits for the
+                    // previous dispatch, so consecutive timings do not overlap.
+                    if let Some(q) = query_pool {
+                        d.cmd_write_timestamp(
+                            cb,
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            q,
+                            2 * i as u32,
+                        );
+                    }
+                    match &cmd.groups {
+                        Groups::Direct([x, y, z]) => d.cmd_dispatch(cb, *x, *y, *z),
+                        Groups::Indirect(buffer, offset) => {
+                            d.cmd_dispatch_indirect(cb, buffer.raw, *offset)
+                        }
+                    }
+                    if let Some(q) = query_pool {
+                        d.cmd_write_timestamp(
+                            cb,
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            q,
+                            2 * i as u32 + 1,
+                        );
+                    }
+                }
+            })?;
+
+            let Some(q) = query_pool else {
+                return Ok(vec![DispatchStats::default(); cmds.len()]);
+            };
+            let mut ticks = vec![0u64; 2 * cmds.len()];
+            unsafe {
+                device.get_query_pool_results(
+                    q,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            }
+            .vk("vkGetQueryPoolResults")?;
+            Ok(crate::timing::stats_from_ticks(
+                &ticks,
+                self.timestamp_valid_bits,
+                self.timestamp_period_ns,
+            ))
+        })();
+
+        unsafe {
+            device.destroy_descriptor_pool(descriptor_pool, None);
+            if let Some(q) = query_pool {
+                device.destroy_query_pool(q, None);
+            }
+        }
+        result.map_err(fail)
+    }
+}
+
+fn mapped_bytes(buffer: &mut Buffer) -> Result<&mut [u8]> {
+    buffer
+        .allocation
+        .as_mut()
+        .and_then(|a| a.mapped_slice_mut())
+        .ok_or(RuntimeError::Allocation {
+            backend: BACKEND,
+            bytes: 0,
+            detail: "staging memory is not host-mapped".into(),
+        })
+}
+
+unsafe fn barrier(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    src_stage: vk::PipelineStageFlags,
+    src_access: vk::AccessFlags,
+    dst_stage: vk::PipelineStageFlags,
+    dst_access: vk::AccessFlags,
+) {
+    let mb = vk::MemoryBarrier::default()
+        .src_access_mask(src_access)
+        .dst_access_mask(dst_access);
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cb,
+            src_stage,
+            dst_stage,
+            vk::DependencyFlags::empty(),
+            &[mb],
+            &[],
+            &[],
+        )
+    };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The messenger really collects: provoke one invalid call through the raw device.
+    #[test]
+    fn validation_messages_are_collected() {
+        let Ok(dev) = VkDevice::new() else { return };
+        if dev.shared.debug.is_none() {
+            println!("skipping: validation layer not active");
+            return;
+        }
+        assert!(dev.take_messages().is_empty());
+        let info = vk::BufferCreateInfo::default()
+            .size(0) // VUID-VkBufferCreateInfo-size-00912
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+        unsafe {
+            if let Ok(b) = dev.shared.device.create_buffer(&info, None) {
+                dev.shared.device.destroy_buffer(b, None);
+            }
+        }
+        let msgs = dev.take_messages();
+        assert!(msgs.iter().any(|m| m.contains("00912")), "{msgs:?}");
+        assert!(dev.take_messages().is_empty(), "take drains");
+    }
+}

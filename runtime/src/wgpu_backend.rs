@@ -1,0 +1,638 @@
+//! The wgpu backend: consumes `KernelArtifact::wgsl`. One wgpu device on the Vulkan API (the
+//! only API this project targets), buffers as plain `wgpu::Buffer`s, one compute pass per
+//! dispatch so that each pass can carry its own timestamp writes.
+//!
+//! wgpu reports most failures asynchronously through error scopes rather than return
+//! values, so every operation that can fail on user input (shader compilation, binding,
+//! submission) runs inside a validation + internal error scope that is popped into a
+//! `RuntimeError`. Anything that escapes the scopes goes to the uncaptured-error handler,
+//! which collects it (wgpu's default handler would panic).
+
+use std::borrow::Cow;
+use std::num::NonZeroU64;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
+
+use crate::buffer::{round_up, storage_binding_size, uniform_binding_size, RawBuffer};
+use crate::device::Limits;
+use crate::pipeline_cache::{Code, PipelineCache};
+use crate::{
+    BackendKind, BindingKind, BufferArg, DeviceInfo, Dispatch, DispatchStats, KernelArtifact,
+    Result, RuntimeError,
+};
+
+const BACKEND: BackendKind = BackendKind::Wgpu;
+
+/// Distinguishes devices so a buffer from one device is never bound on another.
+static NEXT_DEVICE_ID: AtomicU64 = AtomicU64::new(1);
+
+#[derive(Clone)]
+pub(crate) struct Buffer {
+    pub(crate) device_id: u64,
+    pub(crate) buffer: wgpu::Buffer,
+}
+
+pub(crate) struct Pipeline {
+    pipeline: wgpu::ComputePipeline,
+    bind_group_layout: wgpu::BindGroupLayout,
+}
+
+/// One recorded dispatch, holding everything it binds so it outlives the caller's borrows.
+pub(crate) struct Cmd {
+    kernel: String,
+    pipeline: Arc<Pipeline>,
+    /// (binding index, buffer, bound bytes)
+    bindings: Vec<(u32, wgpu::Buffer, u64)>,
+    groups: Groups,
+}
+
+enum Groups {
+    Direct([u32; 3]),
+    Indirect(wgpu::Buffer, u64),
+}
+
+pub(crate) struct WgpuDevice {
+    id: u64,
+    pub(crate) info: DeviceInfo,
+    pub(crate) limits: Limits,
+    pub(crate) pipelines: PipelineCache<Pipeline>,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    max_buffer_size: u64,
+    timestamp_period_ns: f64,
+    messages: Arc<Mutex<Vec<String>>>,
+}
+
+const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::UNIFORM)
+    .union(wgpu::BufferUsages::INDIRECT)
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// Features used when the adapter has them. TIMESTAMP_QUERY alone covers compute-pass
+/// timestamp writes; the *_INSIDE_PASSES/ENCODERS features are only for `write_timestamp`.
+const WANTED_FEATURES: wgpu::Features = wgpu::Features::SUBGROUP
+    .union(wgpu::Features::SUBGROUP_BARRIER)
+    .union(wgpu::Features::TIMESTAMP_QUERY)
+    .union(wgpu::Features::SHADER_INT64)
+    .union(wgpu::Features::SHADER_FLOAT32_ATOMIC);
+
+fn adapter_rank(t: wgpu::DeviceType) -> u32 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+impl WgpuDevice {
+    pub(crate) fn new() -> Result<Self> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let adapter = adapters
+            .into_iter()
+            .min_by_key(|a| adapter_rank(a.get_info().device_type))
+            .ok_or_else(|| RuntimeError::NoAdapter {
+                backend: BACKEND,
+                detail: "wgpu enumerated no Vulkan adapter (is libvulkan.so.1 with a driver \
+                         ICD installed?)"
+                    .into(),
+            })?;
+        let adapter_info = adapter.get_info();
+        let features = adapter.features() & WANTED_FEATURES;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("cohort"),
+            required_features: features,
+            // The adapter's own limits, not WebGPU defaults, so large buffers work.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| RuntimeError::DeviceCreation {
+            backend: BACKEND,
+            detail: e.to_string(),
+        })?;
+
+        let messages = Arc::new(Mutex::new(Vec::new()));
+        let sink = messages.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let msg = format!("wgpu: {e}");
+            eprintln!("{msg}");
+            sink.lock().unwrap_or_else(|p| p.into_inner()).push(msg);
+        }));
+
+        let l = device.limits();
+        let (sg_min, sg_max) = (
+            adapter_info.subgroup_min_size,
+            adapter_info.subgroup_max_size,
+        );
+        let subgroup_size = if sg_min == sg_max {
+            sg_min
+        } else {
+            vulkan_default_subgroup_size(&adapter)
+                .filter(|s| (sg_min..=sg_max).contains(s))
+                .unwrap_or(sg_max)
+        };
+        let timestamps = features.contains(wgpu::Features::TIMESTAMP_QUERY)
+            && queue.get_timestamp_period() > 0.0;
+        let info = DeviceInfo {
+            backend: BACKEND,
+            adapter_name: adapter_info.name.clone(),
+            driver: format!("{} {}", adapter_info.driver, adapter_info.driver_info)
+                .trim()
+                .to_string(),
+            subgroup_size_min: sg_min,
+            subgroup_size_max: sg_max,
+            subgroup_size,
+            // wgpu 30 has no way to request a subgroup size for a pipeline.
+            supports_required_subgroup_size: false,
+            timestamps,
+            max_workgroups_per_dim: l.max_compute_workgroups_per_dimension,
+            max_storage_buffer_binding_size: l.max_storage_buffer_binding_size,
+        };
+        let limits = Limits {
+            max_workgroups: [l.max_compute_workgroups_per_dimension; 3],
+            max_workgroup_size: [
+                l.max_compute_workgroup_size_x,
+                l.max_compute_workgroup_size_y,
+                l.max_compute_workgroup_size_z,
+            ],
+            max_invocations: l.max_compute_invocations_per_workgroup,
+            max_storage_binding: l.max_storage_buffer_binding_size,
+            max_uniform_binding: l.max_uniform_buffer_binding_size,
+            subgroups: features.contains(wgpu::Features::SUBGROUP),
+        };
+        Ok(WgpuDevice {
+            id: NEXT_DEVICE_ID.fetch_add(1, Ordering::Relaxed),
+            info,
+            limits,
+            pipelines: PipelineCache::new(Code::Wgsl),
+            max_buffer_size: l.max_buffer_size,
+            timestamp_period_ns: queue.get_timestamp_period() as f64,
+            device,
+            queue,
+            messages,
+        })
+    }
+
+    pub(crate) fn take_messages(&self) -> Vec<String> {
+        std::mem::take(&mut *self.messages.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+
+    fn own<'a>(&self, raw: &'a RawBuffer) -> Option<&'a wgpu::Buffer> {
+        match raw {
+            RawBuffer::Wgpu(b) if b.device_id == self.id => Some(&b.buffer),
+            _ => None,
+        }
+    }
+
+    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
+    /// start. wgpu zero-initialises the rest.
+    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        if bytes > self.max_buffer_size {
+            return Err(RuntimeError::Allocation {
+                backend: BACKEND,
+                bytes,
+                detail: format!("the device's max_buffer_size is {}", self.max_buffer_size),
+            });
+        }
+        let scope = Scope::push(&self.device);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: bytes,
+            usage: BUFFER_USAGE,
+            mapped_at_creation: !init.is_empty(),
+        });
+        if !init.is_empty() {
+            // Mapping at creation writes straight into the allocation: no staging copy.
+            let mut view =
+                buffer
+                    .slice(..)
+                    .get_mapped_range_mut()
+                    .map_err(|e| RuntimeError::Wgpu {
+                        context: "buffer mapping",
+                        detail: e.to_string(),
+                    })?;
+            view.slice(..init.len()).copy_from_slice(init);
+            drop(view);
+            buffer.unmap();
+        }
+        scope.pop().map_err(|detail| RuntimeError::Allocation {
+            backend: BACKEND,
+            bytes,
+            detail,
+        })?;
+        Ok(RawBuffer::Wgpu(Buffer {
+            device_id: self.id,
+            buffer,
+        }))
+    }
+
+    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
+        let align = wgpu::COPY_BUFFER_ALIGNMENT;
+        if offset % align != 0 {
+            return Err(RuntimeError::Unaligned {
+                what: "a write offset",
+                bytes: offset,
+            });
+        }
+        if bytes.len() as u64 % align != 0 {
+            return Err(RuntimeError::Unaligned {
+                what: "a write",
+                bytes: bytes.len() as u64,
+            });
+        }
+        let scope = Scope::push(&self.device);
+        // Staged by wgpu and executed before the next submission, which keeps it ordered
+        // before any later dispatch or read.
+        self.queue.write_buffer(buffer, offset, bytes);
+        scope.pop().map_err(|detail| RuntimeError::Wgpu {
+            context: "write_buffer",
+            detail,
+        })
+    }
+
+    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
+        if dst.is_empty() {
+            return Ok(());
+        }
+        // Allocations are multiples of 16 bytes, so the rounded copy stays inside.
+        let size = round_up(dst.len() as u64, wgpu::COPY_BUFFER_ALIGNMENT);
+        let scope = Scope::push(&self.device);
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cohort readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        let index = self.queue.submit([enc.finish()]);
+        let mapped = map_read(&staging);
+        self.wait(index)?;
+        scope.pop().map_err(|detail| RuntimeError::Wgpu {
+            context: "read",
+            detail,
+        })?;
+        receive_map(mapped)?;
+        let view = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "buffer mapping",
+                detail: e.to_string(),
+            })?;
+        dst.copy_from_slice(&view[..dst.len()]);
+        Ok(())
+    }
+
+    pub(crate) fn record(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        if let Some(n) = kernel.features.required_subgroup_size {
+            let (min, max) = (self.info.subgroup_size_min, self.info.subgroup_size_max);
+            if !(min == max && n == min) {
+                return Err(RuntimeError::SubgroupSize {
+                    kernel: kernel.name.clone(),
+                    backend: BACKEND,
+                    required: n,
+                    detail: format!(
+                        "wgpu cannot pin a pipeline's subgroup size and this adapter's sizes \
+                         range over [{min}, {max}]; use the vulkan backend"
+                    ),
+                });
+            }
+        }
+        let pipeline = self
+            .pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))?;
+        let foreign = |param: &str| RuntimeError::ForeignBuffer {
+            kernel: kernel.name.clone(),
+            param: param.to_string(),
+        };
+        let mut bindings = Vec::with_capacity(args.len());
+        for (b, arg) in kernel.bindings.iter().zip(args) {
+            let buffer = self.own(arg.raw).ok_or_else(|| foreign(&b.name))?;
+            let size = match b.kind {
+                BindingKind::Uniform => uniform_binding_size(arg.size_bytes),
+                BindingKind::StorageRead | BindingKind::StorageReadWrite => {
+                    storage_binding_size(arg.size_bytes)
+                }
+            };
+            bindings.push((b.binding, buffer.clone(), size));
+        }
+        let groups = match dispatch {
+            Dispatch::Groups(g) => Groups::Direct(*g),
+            Dispatch::Indirect { args, offset_elems } => {
+                let buffer = self
+                    .own(&args.raw)
+                    .ok_or_else(|| foreign("indirect arguments"))?;
+                Groups::Indirect(buffer.clone(), (*offset_elems as u64) * 4)
+            }
+        };
+        Ok(Cmd {
+            kernel: kernel.name.clone(),
+            pipeline,
+            bindings,
+            groups,
+        })
+    }
+
+    fn create_pipeline(&self, kernel: &KernelArtifact) -> Result<Pipeline> {
+        let fail = |detail: String| RuntimeError::ShaderCompilation {
+            kernel: kernel.name.clone(),
+            backend: BACKEND,
+            detail,
+        };
+        if kernel.wgsl.trim().is_empty() {
+            return Err(fail("the artifact has no WGSL code".into()));
+        }
+        let scope = Scope::push(&self.device);
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&kernel.name),
+                source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(&kernel.wgsl)),
+            });
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = kernel
+            .bindings
+            .iter()
+            .map(|b| wgpu::BindGroupLayoutEntry {
+                binding: b.binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: match b.kind {
+                        BindingKind::StorageRead => {
+                            wgpu::BufferBindingType::Storage { read_only: true }
+                        }
+                        BindingKind::StorageReadWrite => {
+                            wgpu::BufferBindingType::Storage { read_only: false }
+                        }
+                        BindingKind::Uniform => wgpu::BufferBindingType::Uniform,
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            })
+            .collect();
+        let bind_group_layout =
+            self.device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(&kernel.name),
+                    entries: &entries,
+                });
+        let layout = self
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(&kernel.name),
+                bind_group_layouts: &[Some(&bind_group_layout)],
+                immediate_size: 0,
+            });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(&kernel.name),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(&kernel.entry_point),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        scope.pop().map_err(fail)?;
+        Ok(Pipeline {
+            pipeline,
+            bind_group_layout,
+        })
+    }
+
+    pub(crate) fn submit(&self, cmds: &[Cmd]) -> Result<Vec<DispatchStats>> {
+        let fail = |detail: String| {
+            let mut names: Vec<&str> = cmds.iter().map(|c| c.kernel.as_str()).collect();
+            names.dedup();
+            RuntimeError::Dispatch {
+                kernel: names.join(", "),
+                backend: BACKEND,
+                detail,
+            }
+        };
+        let n = cmds.len() as u32;
+        let scope = Scope::push(&self.device);
+        let queries = self.info.timestamps.then(|| {
+            self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("cohort timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * n,
+            })
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        for (i, cmd) in cmds.iter().enumerate() {
+            let entries: Vec<wgpu::BindGroupEntry> = cmd
+                .bindings
+                .iter()
+                .map(|(binding, buffer, size)| wgpu::BindGroupEntry {
+                    binding: *binding,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset: 0,
+                        size: NonZeroU64::new(*size),
+                    }),
+                })
+                .collect();
+            let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&cmd.kernel),
+                layout: &cmd.pipeline.bind_group_layout,
+                entries: &entries,
+            });
+            let timestamp_writes = queries.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(2 * i as u32),
+                end_of_pass_write_index: Some(2 * i as u32 + 1),
+            });
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&cmd.kernel),
+                timestamp_writes,
+            });
+            pass.set_pipeline(&cmd.pipeline.pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            match &cmd.groups {
+                Groups::Direct([x, y, z]) => pass.dispatch_workgroups(*x, *y, *z),
+                Groups::Indirect(buffer, offset) => {
+                    pass.dispatch_workgroups_indirect(buffer, *offset)
+                }
+            }
+        }
+        let readback = queries.as_ref().map(|q| {
+            let bytes = 16 * n as u64;
+            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cohort timestamp resolve"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cohort timestamp readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            enc.resolve_query_set(q, 0..2 * n, &resolve, 0);
+            enc.copy_buffer_to_buffer(&resolve, 0, &readback, 0, bytes);
+            readback
+        });
+        let command_buffer = enc.finish();
+        // Encoding errors (bad bindings, ...) surface here; submitting an invalid command
+        // buffer would only add a second, less helpful error.
+        scope.pop().map_err(fail)?;
+
+        let scope = Scope::push(&self.device);
+        let index = self.queue.submit([command_buffer]);
+        let mapped = readback.as_ref().map(map_read);
+        self.wait(index)?;
+        scope.pop().map_err(fail)?;
+
+        let (Some(readback), Some(mapped)) = (readback, mapped) else {
+            return Ok(vec![DispatchStats::default(); cmds.len()]);
+        };
+        receive_map(mapped)?;
+        let view = readback
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "timestamp mapping",
+                detail: e.to_string(),
+            })?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&view[..]);
+        // wgpu hands back raw 64-bit ticks; the Vulkan layer below already masked them.
+        Ok(crate::timing::stats_from_ticks(
+            &ticks,
+            64,
+            self.timestamp_period_ns,
+        ))
+    }
+
+    fn wait(&self, index: wgpu::SubmissionIndex) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "device poll",
+                detail: e.to_string(),
+            })
+    }
+}
+
+/// Starts mapping `buffer` for reading; the result arrives once the device is polled.
+fn map_read(
+    buffer: &wgpu::Buffer,
+) -> mpsc::Receiver<std::result::Result<(), wgpu::BufferAsyncError>> {
+    let (tx, rx) = mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    rx
+}
+
+fn receive_map(rx: mpsc::Receiver<std::result::Result<(), wgpu::BufferAsyncError>>) -> Result<()> {
+    match rx.recv() {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(e)) => Err(RuntimeError::Wgpu {
+            context: "map_async",
+            detail: e.to_string(),
+        }),
+        Err(_) => Err(RuntimeError::Wgpu {
+            context: "map_async",
+            detail: "the mapping callback never ran".into(),
+        }),
+    }
+}
+
+/// naga 30's WGSL front end knows `enable subgroups;` but rejects it as "not yet
+/// implemented", while accepting subgroup builtins without it (gated on the device's
+/// SUBGROUP feature instead). Standard WGSL requires the directive, so code written for
+/// other implementations carries it; drop it here rather than fail.
+fn strip_subgroups_enable(wgsl: &str) -> Cow<'_, str> {
+    let is_directive = |line: &str| {
+        let compact: String = line.chars().filter(|c| !c.is_whitespace()).collect();
+        compact == "enablesubgroups;"
+    };
+    if !wgsl.lines().any(is_directive) {
+        return Cow::Borrowed(wgsl);
+    }
+    let kept: Vec<&str> = wgsl
+        .lines()
+        .map(|l| if is_directive(l) { "" } else { l })
+        .collect();
+    Cow::Owned(kept.join("\n"))
+}
+
+/// The subgroup size Vulkan gives a pipeline by default, read through wgpu's Vulkan HAL
+/// (wgpu itself only reports the min/max range).
+fn vulkan_default_subgroup_size(adapter: &wgpu::Adapter) -> Option<u32> {
+    // SAFETY: only queries properties through the adapter's live instance and device.
+    let hal = unsafe { adapter.as_hal::<wgpu::hal::api::Vulkan>() }?;
+    let instance = hal.shared_instance().raw_instance();
+    let mut subgroup = ash::vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props = ash::vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    unsafe { instance.get_physical_device_properties2(hal.raw_physical_device(), &mut props) };
+    Some(subgroup.subgroup_size).filter(|&s| s > 0)
+}
+
+/// A validation scope nested in an internal-error scope, popped together: the first error
+/// either caught (validation first, as it is the one user code triggers) as its message.
+struct Scope {
+    internal: wgpu::ErrorScopeGuard,
+    validation: wgpu::ErrorScopeGuard,
+}
+
+impl Scope {
+    fn push(device: &wgpu::Device) -> Self {
+        let internal = device.push_error_scope(wgpu::ErrorFilter::Internal);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        Scope {
+            internal,
+            validation,
+        }
+    }
+
+    fn pop(self) -> std::result::Result<(), String> {
+        let validation = pollster::block_on(self.validation.pop());
+        let internal = pollster::block_on(self.internal.pop());
+        match validation.or(internal) {
+            None => Ok(()),
+            Some(e) => Err(error_text(&e)),
+        }
+    }
+}
+
+/// wgpu's `Display` for an error is only the top line; the cause chain holds the details
+/// (e.g. the WGSL parse error with its source location).
+fn error_text(e: &wgpu::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = std::error::Error::source(e);
+    while let Some(s) = source {
+        let line = s.to_string();
+        if !text.contains(&line) {
+            text.push_str(": ");
+            text.push_str(&line);
+        }
+        source = s.source();
+    }
+    text
+}

@@ -1,0 +1,17 @@
+//! Transcendental and float math mapped to naga math functions; compared across
+//! backends and with the host within a stated ulp bound.
+use cohort::prelude::*;
+
+#[kernel(workgroup = 64)]
+pub fn mathfns(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
+    let i = gi as usize;
+    if i >= xs.len() {
+        return;
+    }
+    let x = xs[i];
+    let a = x.sin() * x.cos() + (x * 0.25).exp();
+    let b = (x.abs() + 1.0).ln() + (x.abs() + 0.5).sqrt() + x.abs().powf(1.5);
+    let c = x.floor() + x.fract() + x.mul_add(2.0, 1.0) + x.clamp(-1.0, 1.0) + x.signum();
+    let d = x.atan2(1.5) + x.tanh() + x.max(0.25).min(2.0);
+    out[i] = Vec4::new(a, b, c, d);
+}

@@ -1,0 +1,16 @@
+//! One module per kernel (or kernel family); each doc comment says which part of the
+//! language subset it covers.
+
+pub mod bits;
+pub mod collatz;
+pub mod generic;
+pub mod group_pick;
+pub mod histogram;
+pub mod mathfns;
+pub mod rays;
+pub mod reduce;
+pub mod saxpy;
+pub mod sort4;
+pub mod stack_walk;
+pub mod subgroup_scan;
+pub mod vectors;

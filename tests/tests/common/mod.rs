@@ -1,0 +1,57 @@
+//! Shared pieces of the GPU test suites: the devices to run on, deterministic inputs and
+//! comparisons with a stated tolerance.
+#![allow(dead_code)]
+
+use cohort::runtime::{BackendKind, Device};
+
+/// Every backend with an adapter here (both, on lavapipe or a GPU). With `CI=true` a
+/// missing adapter fails the test instead of skipping it.
+pub fn devices() -> Vec<Device> {
+    [BackendKind::Wgpu, BackendKind::Vulkan].into_iter().filter_map(Device::for_tests).collect()
+}
+
+/// xorshift32: reproducible inputs without a dependency.
+pub struct Rng(pub u32);
+impl Rng {
+    pub fn next_u32(&mut self) -> u32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        x
+    }
+    pub fn f32(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * (self.next_u32() >> 8) as f32 / 16777216.0
+    }
+}
+
+/// Distance in units in the last place between two floats (0 when both are equal,
+/// including equal NaN bit patterns).
+pub fn ulps(a: f32, b: f32) -> u32 {
+    if a.to_bits() == b.to_bits() {
+        return 0;
+    }
+    if a.is_nan() || b.is_nan() {
+        return u32::MAX;
+    }
+    let key = |x: f32| {
+        let b = x.to_bits() as i32;
+        if b < 0 { i32::MIN - b } else { b }
+    };
+    (key(a) as i64 - key(b) as i64).unsigned_abs().min(u32::MAX as u64) as u32
+}
+
+/// Asserts that two float slices agree within `max_ulps` (or `abs` absolute error,
+/// for results near zero where ulps are meaningless).
+pub fn assert_close(what: &str, a: &[f32], b: &[f32], max_ulps: u32, abs: f32) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths differ");
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        let ok = ulps(*x, *y) <= max_ulps || (x - y).abs() <= abs;
+        assert!(ok, "{what}: element {i} differs: {x} vs {y} ({} ulps; bound {max_ulps} ulps or {abs} absolute)", ulps(*x, *y));
+    }
+}
+
+pub fn flatten_vec4(v: &[glam::Vec4]) -> Vec<f32> {
+    v.iter().flat_map(|x| x.to_array()).collect()
+}

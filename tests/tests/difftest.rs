@@ -1,0 +1,341 @@
+//! Cross-backend difftests: each kernel runs on wgpu (WGSL) and on raw Vulkan (SPIR-V
+//! through ash) with the same inputs, and the outputs must agree with each other and,
+//! where the kernel has no cross-invocation communication, with the host run of the
+//! same Rust function. Integer results are compared exactly; float results exactly
+//! between backends unless stated, and within a stated ulp bound against the host
+//! (GPU drivers may contract `a*b+c` into an FMA and use their own transcendentals).
+
+mod common;
+use cohort::host::for_each_invocation;
+use cohort::runtime::Device;
+use cohort::Group;
+use common::*;
+use glam::{UVec2, UVec4, Vec3, Vec4};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+fn run_all<T: PartialEq + std::fmt::Debug>(name: &str, f: impl Fn(&Device) -> T) -> Vec<T> {
+    let outs: Vec<T> = devices().iter().map(|d| f(d)).collect();
+    for w in outs.windows(2) {
+        assert_eq!(w[0], w[1], "{name}: wgpu and Vulkan disagree");
+    }
+    outs
+}
+
+#[test]
+fn saxpy_matches_host() {
+    use cohort_tests::kernels::saxpy::*;
+    let n = 1000u32;
+    let mut rng = Rng(1);
+    let x: Vec<f32> = (0..n).map(|_| rng.f32(-10.0, 10.0)).collect();
+    let y0: Vec<f32> = (0..n).map(|_| rng.f32(-10.0, 10.0)).collect();
+    let p = SaxpyParams { a: 1.5, n: n - 3 };
+    let outs = run_all("saxpy", |d| {
+        let xb = d.upload(&x).unwrap();
+        let yb = d.upload(&y0).unwrap();
+        saxpy::launch(d, n, &p, &xb, &yb).unwrap();
+        d.read(&yb).unwrap().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+    });
+    let mut host = y0.clone();
+    for_each_invocation(n, saxpy::INFO.workgroup_size, Group::Thread, |inv| {
+        if inv.global_index < n {
+            saxpy(inv.global_index, &p, &x, &mut host)
+        }
+    });
+    for o in outs {
+        let o: Vec<f32> = o.into_iter().map(f32::from_bits).collect();
+        assert_close("saxpy gpu vs host", &o, &host, 1, 0.0);
+        assert_eq!(o[n as usize - 1], y0[n as usize - 1], "bounds check must leave the tail alone");
+    }
+}
+
+#[test]
+fn structs_trace_spheres() {
+    use cohort_tests::kernels::rays::*;
+    let mut rng = Rng(7);
+    let spheres: Vec<Sphere> = (0..8)
+        .map(|_| Sphere { center: Vec3::new(rng.f32(-4.0, 4.0), rng.f32(-4.0, 4.0), rng.f32(5.0, 15.0)), radius: rng.f32(0.5, 2.0) })
+        .collect();
+    let rays_in: Vec<Ray> = (0..500)
+        .map(|_| Ray { origin: Vec3::ZERO, tmin: 1e-3, dir: Vec3::new(rng.f32(-0.4, 0.4), rng.f32(-0.4, 0.4), 1.0).normalize(), tmax: 1e30 })
+        .collect();
+    let outs = run_all("trace_spheres", |d| {
+        let r = d.upload(&rays_in).unwrap();
+        let s = d.upload(&spheres).unwrap();
+        let h = d.alloc::<Hit>(rays_in.len()).unwrap();
+        trace_spheres::launch(d, rays_in.len() as u32, &r, &s, &h).unwrap();
+        d.read(&h).unwrap()
+    });
+    let mut host = vec![Hit::default(); rays_in.len()];
+    for_each_invocation(rays_in.len() as u32, 64, Group::Thread, |inv| trace_spheres(inv.global_index, &rays_in, &spheres, &mut host));
+    let hits = host.iter().filter(|h| h.hit == 1).count();
+    assert!(hits > 20 && hits < 490, "test scene should mix hits and misses, got {hits}");
+    for o in outs {
+        for (g, h) in o.iter().zip(&host) {
+            assert_eq!((g.hit, g.sphere), (h.hit, h.sphere));
+            assert_close("t", &[g.t], &[h.t], 64, 1e-4);
+            assert_close("normal", &g.normal.to_array(), &h.normal.to_array(), 64, 1e-5);
+        }
+    }
+}
+
+#[test]
+fn loops_collatz() {
+    use cohort_tests::kernels::collatz::*;
+    let seeds: Vec<u32> = (0..777u32).map(|i| i * 37 + 1).collect();
+    let outs = run_all("collatz", |d| {
+        let s = d.upload(&seeds).unwrap();
+        let a = d.alloc::<u32>(seeds.len()).unwrap();
+        let b = d.alloc::<u32>(seeds.len()).unwrap();
+        collatz::launch(d, seeds.len() as u32, &s, &a, &b).unwrap();
+        (d.read(&a).unwrap(), d.read(&b).unwrap())
+    });
+    let (mut ha, mut hb) = (vec![0u32; seeds.len()], vec![0u32; seeds.len()]);
+    for_each_invocation(seeds.len() as u32, 64, Group::Thread, |inv| collatz(inv.global_index, &seeds, &mut ha, &mut hb));
+    assert_eq!(ha[26 / 37], 0, "seed 1 takes no steps");
+    for o in outs {
+        assert_eq!(o, (ha.clone(), hb.clone()));
+    }
+}
+
+#[test]
+fn mut_helpers_sort4() {
+    use cohort_tests::kernels::sort4::*;
+    let mut rng = Rng(3);
+    let v: Vec<Vec4> = (0..300).map(|_| Vec4::new(rng.f32(-200.0, 200.0), rng.f32(-9.0, 9.0), rng.f32(-9.0, 9.0), rng.f32(-200.0, 200.0))).collect();
+    let outs = run_all("sort4", |d| {
+        let b = d.upload(&v).unwrap();
+        sort4::launch(d, v.len() as u32, &b).unwrap();
+        d.read(&b).unwrap()
+    });
+    let mut host = v.clone();
+    for_each_invocation(v.len() as u32, 32, Group::Thread, |inv| sort4(inv.global_index, &mut host));
+    for x in &host {
+        assert!(x.x <= x.y && x.y <= x.z, "not sorted: {x}");
+    }
+    for o in outs {
+        assert_eq!(o, host);
+    }
+}
+
+#[test]
+fn generic_over_trait() {
+    use cohort_tests::kernels::generic::*;
+    let xs: Vec<f32> = (0..256).map(|i| i as f32 * 0.37 - 20.0).collect();
+    fn run<C: Curve>(xs: &[f32]) -> Vec<Vec<f32>> {
+        let outs = run_all("apply_curve", |d| {
+            let x = d.upload(xs).unwrap();
+            let y = d.alloc::<f32>(xs.len()).unwrap();
+            apply_curve::launch::<C>(d, xs.len() as u32, &x, &y).unwrap();
+            d.read(&y).unwrap().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        });
+        let mut host = vec![0f32; xs.len()];
+        for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| apply_curve::<C>(inv.global_index, xs, &mut host));
+        for o in &outs {
+            let o: Vec<f32> = o.iter().map(|b| f32::from_bits(*b)).collect();
+            assert_close("curve", &o, &host, 2, 1e-6);
+        }
+        vec![host]
+    }
+    let sq = run::<Square>(&xs);
+    let tent = run::<Tent>(&xs);
+    assert_ne!(sq, tent, "two strategies must give two kernels");
+    let a = apply_curve::artifact::<Square>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread)).unwrap();
+    let b = apply_curve::artifact::<Tent>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread)).unwrap();
+    assert_ne!(a.wgsl, b.wgsl);
+}
+
+#[test]
+fn workgroup_reduction() {
+    use cohort_tests::kernels::reduce::*;
+    let input: Vec<u32> = (0..5000u32).map(|i| i.wrapping_mul(2654435761) >> 20).collect();
+    let groups = input.len().div_ceil(256);
+    let outs = run_all("reduce_sum", |d| {
+        let i = d.upload(&input).unwrap();
+        let s = d.alloc::<u32>(groups).unwrap();
+        reduce_sum::launch(d, input.len() as u32, &i, &s).unwrap();
+        d.read(&s).unwrap()
+    });
+    let expect: Vec<u32> = input.chunks(256).map(|c| c.iter().sum()).collect();
+    for o in outs {
+        assert_eq!(o, expect);
+    }
+}
+
+#[test]
+fn subgroup_ballot_and_scan() {
+    use cohort_tests::kernels::subgroup_scan::*;
+    let flags: Vec<u32> = (0..200u32).map(|i| ((i * 7 + 3) % 5 < 2) as u32).collect();
+    for d in devices() {
+        let sg = d.info().subgroup_size;
+        let f = d.upload(&flags).unwrap();
+        let (e, i, v) = (d.alloc::<u32>(200).unwrap(), d.alloc::<u32>(200).unwrap(), d.alloc::<u32>(200).unwrap());
+        subgroup_scan::launch(&d, 200u32, &f, &e, &i, &v).unwrap();
+        let (e, i, v) = (d.read(&e).unwrap(), d.read(&i).unwrap(), d.read(&v).unwrap());
+        for (k, chunk) in flags.chunks(sg as usize).enumerate() {
+            let base = k * sg as usize;
+            let mut acc = 0;
+            for (j, f) in chunk.iter().enumerate() {
+                assert_eq!(e[base + j], acc, "exclusive at {}", base + j);
+                acc += f;
+                assert_eq!(i[base + j], acc, "inclusive at {}", base + j);
+                let below: u32 = chunk[..j].iter().sum();
+                let total: u32 = chunk.iter().sum();
+                let full = chunk.len() == sg as usize;
+                let expect = below + (chunk[0] << 8) + ((total > 0) as u32) * (1 << 16)
+                    + ((total == sg) as u32 * (1 << 17)) + (total << 20) + (sg << 26);
+                if full {
+                    assert_eq!(v[base + j], expect, "votes at {}", base + j);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn atomic_histogram() {
+    use cohort_tests::kernels::histogram::*;
+    let values: Vec<u32> = (0..4096u32).map(|i| i.wrapping_mul(2654435761u32.wrapping_add(i)) % 1000 + 5).collect();
+    let outs = run_all("histogram", |d| {
+        let v = d.upload(&values).unwrap();
+        let bins = d.alloc::<u32>(16).unwrap();
+        let stats = d.upload(&[0u32, u32::MAX, 0, 0]).unwrap();
+        histogram::launch(d, values.len() as u32, &v, &bins, &stats).unwrap();
+        (d.read(&bins).unwrap(), d.read(&stats).unwrap())
+    });
+    let bins: Vec<AtomicU32> = (0..16).map(|_| AtomicU32::new(0)).collect();
+    let stats: Vec<AtomicU32> = [0, u32::MAX, 0, 0].into_iter().map(AtomicU32::new).collect();
+    for_each_invocation(values.len() as u32, 128, Group::Thread, |inv| histogram(inv.global_index, &values, &bins, &stats));
+    let hb: Vec<u32> = bins.iter().map(|b| b.load(Ordering::Relaxed)).collect();
+    let hs: Vec<u32> = stats.iter().map(|b| b.load(Ordering::Relaxed)).collect();
+    assert_eq!(hb.iter().sum::<u32>(), values.len() as u32);
+    for o in outs {
+        assert_eq!(o, (hb.clone(), hs.clone()));
+    }
+}
+
+/// Every group level from one source: each invocation gets its group leader's draw.
+#[test]
+fn group_levels_share_leader_value() {
+    use cohort_tests::kernels::group_pick::*;
+    let n = 1000u32;
+    let p = PickParams { seed: 0xC0FFEE, n };
+    for d in devices() {
+        for group in [Group::Thread, Group::Warp, Group::Block(256), Group::Grid] {
+            let out = d.alloc::<u32>(n as usize).unwrap();
+            let spec = group_pick::spec(&d, Some(group));
+            group_pick::launch_spec(&d, &spec, n, &p, &out).unwrap();
+            let gpu = d.read(&out).unwrap();
+            let mut host = vec![0u32; n as usize];
+            for_each_invocation(n, spec.workgroup_size, group, |inv| group_pick(inv.global_index, &p, &mut host));
+            assert_eq!(gpu, host, "{group:?} on {:?} ({})", d.info().backend, spec.suffix());
+            let distinct: std::collections::HashSet<_> = gpu.iter().collect();
+            let expected = match group {
+                Group::Thread => n as usize,
+                Group::Warp => (n as usize).div_ceil(32),
+                Group::Block(b) => (n as usize).div_ceil(b as usize),
+                Group::Grid => 1,
+            };
+            assert_eq!(distinct.len(), expected, "{group:?}: one value per group");
+        }
+        // Both warp lowerings (subgroup broadcast where subgroups are 32 wide, workgroup
+        // memory elsewhere) give the same result where the device supports them.
+        let portable = cohort::Spec::portable(&group_pick::INFO, Group::Warp);
+        let out = d.alloc::<u32>(n as usize).unwrap();
+        group_pick::launch_spec(&d, &portable, n, &p, &out).unwrap();
+        let mut host = vec![0u32; n as usize];
+        for_each_invocation(n, 256, Group::Warp, |inv| group_pick(inv.global_index, &p, &mut host));
+        assert_eq!(d.read(&out).unwrap(), host);
+    }
+}
+
+#[test]
+fn casts_and_bits() {
+    use cohort_tests::kernels::bits::*;
+    let mut rng = Rng(99);
+    let input: Vec<u32> = (0..1000).map(|_| rng.next_u32()).chain([0, 1, u32::MAX, 0x8000_0000]).collect();
+    let outs = run_all("bits", |d| {
+        let i = d.upload(&input).unwrap();
+        let o = d.alloc::<UVec4>(input.len()).unwrap();
+        bits::launch(d, input.len() as u32, &i, &o).unwrap();
+        d.read(&o).unwrap()
+    });
+    let mut host = vec![UVec4::ZERO; input.len()];
+    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| bits(inv.global_index, &input, &mut host));
+    for o in outs {
+        assert_eq!(o, host);
+    }
+}
+
+#[test]
+fn local_array_stack() {
+    use cohort_tests::kernels::stack_walk::*;
+    let mut rng = Rng(5);
+    let qs: Vec<UVec2> = (0..400)
+        .map(|_| {
+            let a = rng.next_u32() % 1024;
+            let b = rng.next_u32() % 1024;
+            UVec2::new(a.min(b), a.max(b) + 1)
+        })
+        .collect();
+    let outs = run_all("stack_walk", |d| {
+        let q = d.upload(&qs).unwrap();
+        let o = d.alloc::<u32>(qs.len()).unwrap();
+        stack_walk::launch(d, qs.len() as u32, &q, &o).unwrap();
+        d.read(&o).unwrap()
+    });
+    let mut host = vec![0u32; qs.len()];
+    for_each_invocation(qs.len() as u32, 64, Group::Thread, |inv| stack_walk(inv.global_index, &qs, &mut host));
+    for (q, h) in qs.iter().zip(&host) {
+        let sum: u32 = (q.x..q.y).sum();
+        assert_eq!(h & 0xfffff, sum & 0xfffff);
+    }
+    for o in outs {
+        assert_eq!(o, host);
+    }
+}
+
+/// Transcendentals: the backends run the same driver here, so they agree closely; the
+/// host's libm differs by a few ulps (bound: 64 ulps, or 1e-5 absolute near zero).
+#[test]
+fn transcendental_math() {
+    use cohort_tests::kernels::mathfns::*;
+    let xs: Vec<f32> = (0..512).map(|i| (i as f32 - 256.0) * 0.03125).collect();
+    let outs: Vec<Vec<Vec4>> = devices()
+        .iter()
+        .map(|d| {
+            let x = d.upload(&xs).unwrap();
+            let o = d.alloc::<Vec4>(xs.len()).unwrap();
+            mathfns::launch(d, xs.len() as u32, &x, &o).unwrap();
+            d.read(&o).unwrap()
+        })
+        .collect();
+    let mut host = vec![Vec4::ZERO; xs.len()];
+    for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| mathfns(inv.global_index, &xs, &mut host));
+    for w in outs.windows(2) {
+        assert_close("mathfns wgpu vs vulkan", &flatten_vec4(&w[0]), &flatten_vec4(&w[1]), 4, 1e-6);
+    }
+    for o in &outs {
+        assert_close("mathfns gpu vs host", &flatten_vec4(o), &flatten_vec4(&host), 64, 1e-5);
+    }
+}
+
+#[test]
+fn vector_and_matrix_math() {
+    use cohort_tests::kernels::vectors::*;
+    let mut rng = Rng(11);
+    let input: Vec<Vec4> = (0..300).map(|_| Vec4::new(rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0), rng.f32(0.1, 3.0), rng.f32(0.0, 2.0))).collect();
+    let outs: Vec<Vec<Vec4>> = devices()
+        .iter()
+        .map(|d| {
+            let i = d.upload(&input).unwrap();
+            let o = d.alloc::<Vec4>(input.len()).unwrap();
+            vectors::launch(d, input.len() as u32, &i, &o).unwrap();
+            d.read(&o).unwrap()
+        })
+        .collect();
+    let mut host = vec![Vec4::ZERO; input.len()];
+    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| vectors(inv.global_index, &input, &mut host));
+    for o in &outs {
+        assert_close("vectors gpu vs host", &flatten_vec4(o), &flatten_vec4(&host), 64, 1e-4);
+    }
+}
