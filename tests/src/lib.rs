@@ -2,3 +2,4 @@
 //! Each module is one kernel (or one family) covering part of the language subset.
 
 pub mod kernels;
+pub mod variants;

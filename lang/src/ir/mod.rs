@@ -3,6 +3,7 @@
 
 pub(crate) mod builder;
 pub mod control;
+mod fold;
 pub mod function;
 pub mod group;
 pub mod kernel;

@@ -13,11 +13,32 @@ use super::val::Val;
 use glam::{IVec2, IVec3, IVec4, Mat3, Mat4, UVec2, UVec3, UVec4, Vec2, Vec3, Vec4};
 
 pub(crate) fn binary<R>(op: B, l: naga::Handle<Expression>, r: naga::Handle<Expression>) -> Val<R> {
-    Val::from_handle(with(|c| c.expr(Expression::Binary { op, left: l, right: r })))
+    Val::from_handle(with(|c| {
+        // Operations on literals are folded here, with Rust's (wrapping) semantics:
+        // WGSL rejects constant expressions that overflow, such as `1384639240u << 27u`.
+        let exprs = &c.f().func.expressions;
+        let lit = |h| match exprs[h] {
+            Expression::Literal(v) => Some(v),
+            _ => None,
+        };
+        if let (Some(a), Some(b)) = (lit(l), lit(r)) {
+            if let Some(v) = super::fold::binary(op, a, b) {
+                return c.expr(Expression::Literal(v));
+            }
+        }
+        c.expr(Expression::Binary { op, left: l, right: r })
+    }))
 }
 
 pub(crate) fn unary<R>(op: U, e: naga::Handle<Expression>) -> Val<R> {
-    Val::from_handle(with(|c| c.expr(Expression::Unary { op, expr: e })))
+    Val::from_handle(with(|c| {
+        if let Expression::Literal(v) = c.f().func.expressions[e] {
+            if let Some(v) = super::fold::unary(op, v) {
+                return c.expr(Expression::Literal(v));
+            }
+        }
+        c.expr(Expression::Unary { op, expr: e })
+    }))
 }
 
 pub(crate) fn splat<S>(size: VectorSize, v: Val<S>) -> naga::Handle<Expression> {

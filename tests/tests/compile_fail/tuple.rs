@@ -1,0 +1,9 @@
+use cohort::prelude::*;
+
+#[kernel(workgroup = 64)]
+pub fn k(#[builtin(global_index)] gi: u32, out: &mut [u32]) {
+    let pair = (gi, gi + 1);
+    out[gi as usize] = gi;
+}
+
+fn main() {}

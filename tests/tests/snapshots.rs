@@ -1,0 +1,67 @@
+//! Locks the generated shaders: for every kernel variant, the WGSL and the SPIR-V
+//! disassembly (after `naga::compact`, so names are stable) are insta snapshots. Every
+//! snapshot is also checked: the SPIR-V passes `spirv-val` and the WGSL re-parses and
+//! re-validates through naga's own front end. (Executing them is the difftests' job.)
+
+use cohort_tests::variants;
+use std::process::Command;
+
+fn disassemble(words: &[u32]) -> String {
+    use rspirv::binary::Disassemble;
+    let module = rspirv::dr::load_words(words).expect("naga wrote SPIR-V that rspirv cannot load");
+    module.disassemble()
+}
+
+fn spirv_val(name: &str, words: &[u32]) {
+    let dir = std::env::temp_dir().join(format!("cohort-spv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.spv"));
+    std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(words)).unwrap();
+    match Command::new("spirv-val").arg("--target-env").arg("vulkan1.1").arg(&path).output() {
+        Ok(out) => assert!(
+            out.status.success(),
+            "spirv-val rejects {name}:\n{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        ),
+        Err(e) => {
+            assert!(std::env::var("CI").as_deref() != Ok("true"), "spirv-val not found ({e}); install spirv-tools");
+            eprintln!("skipping spirv-val for {name}: {e} (install spirv-tools)");
+        }
+    }
+}
+
+fn reparse_wgsl(name: &str, wgsl: &str) {
+    let module = naga::front::wgsl::parse_str(wgsl).unwrap_or_else(|e| panic!("{name}: WGSL does not re-parse: {}", e.emit_to_string(wgsl)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name}: re-parsed WGSL does not validate: {:?}", e.into_inner()));
+}
+
+#[test]
+fn every_variant_is_locked_and_valid() {
+    let variants = variants::all();
+    assert!(variants.len() >= 18);
+    let mut names = std::collections::HashSet::new();
+    for v in variants {
+        assert!(names.insert(v.name.clone()), "duplicate variant name {}", v.name);
+        let built = (v.build)(&v.spec);
+        let e = cohort::emit::emit(&built).unwrap_or_else(|e| panic!("{e}"));
+        reparse_wgsl(&v.name, &e.wgsl);
+        spirv_val(&v.name, &e.spirv);
+        insta::assert_snapshot!(format!("{}.wgsl", v.name), e.wgsl);
+        insta::assert_snapshot!(format!("{}.spvasm", v.name), disassemble(&e.spirv));
+    }
+}
+
+/// Building the same variant twice gives byte-identical output (no hash-map order or
+/// handle leaks into names).
+#[test]
+fn emission_is_deterministic() {
+    for v in variants::all() {
+        let a = cohort::emit::emit(&(v.build)(&v.spec)).unwrap();
+        let b = cohort::emit::emit(&(v.build)(&v.spec)).unwrap();
+        assert_eq!(a.wgsl, b.wgsl, "{}", v.name);
+        assert_eq!(a.spirv, b.spirv, "{}", v.name);
+    }
+}
