@@ -1,0 +1,167 @@
+//! The pinhole camera of a [`crate::Scene`], in Mitsuba's conventions (sensor `perspective` +
+//! `hdrfilm`), and the small frame the renderer's camera-ray kernel needs. Sources build it from a
+//! `to_world` transform; the renderer reads [`Camera::frame`].
+
+use glam::{Mat4, Vec3};
+
+/// Which image extent `fov` spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Diagonal,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+impl FovAxis {
+    pub fn parse(s: &str) -> Option<FovAxis> {
+        match s.to_ascii_lowercase().as_str() {
+            "x" => Some(FovAxis::X),
+            "y" => Some(FovAxis::Y),
+            "diagonal" => Some(FovAxis::Diagonal),
+            "smaller" => Some(FovAxis::Smaller),
+            "larger" => Some(FovAxis::Larger),
+            _ => None,
+        }
+    }
+}
+
+/// Perspective pinhole camera with a box reconstruction filter (each sample lands in the pixel it
+/// was drawn in).
+///
+/// `to_world` is kept whole instead of (origin, target, up) because Mitsuba allows any transform
+/// before `lookat` (a common one is `scale x=-1`, a mirrored image) and those must survive;
+/// [`Camera::origin`], [`Camera::target`] and [`Camera::up`] read the usual triple back out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Camera space (Mitsuba): +z forward, +y up, +x LEFT (image x runs along -x).
+    pub to_world: Mat4,
+    /// Full angle in degrees along `fov_axis`.
+    pub fov: f32,
+    pub fov_axis: FovAxis,
+    pub width: u32,
+    pub height: u32,
+    /// Distance (along the view axis) before which nothing is seen; Mitsuba default 1e-2.
+    pub near_clip: f32,
+    pub far_clip: f32,
+}
+
+/// What a camera-ray kernel needs: the direction for film coordinates `(sx, sy)` in `[0,1]^2`
+/// (x left to right, y top to bottom) is `forward + (2 sx - 1) right + (1 - 2 sy) up`, not
+/// normalised. `right` and `up` already carry the tangent of the half field of view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraFrame {
+    pub origin: Vec3,
+    pub forward: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+}
+
+impl Camera {
+    /// Mitsuba's `lookat`: forward = target - origin, image x along cross(forward, up).
+    /// Returns `None` when `up` is parallel to the view direction or origin == target.
+    pub fn look_at(
+        origin: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov: f32,
+        fov_axis: FovAxis,
+        width: u32,
+        height: u32,
+    ) -> Option<Camera> {
+        Some(Camera {
+            to_world: look_at_matrix(origin, target, up)?,
+            fov,
+            fov_axis,
+            width,
+            height,
+            near_clip: 1e-2,
+            far_clip: 1e4,
+        })
+    }
+
+    pub fn origin(&self) -> Vec3 {
+        self.to_world.transform_point3(Vec3::ZERO)
+    }
+
+    /// A point one unit (in camera space) in front of the origin.
+    pub fn target(&self) -> Vec3 {
+        self.to_world.transform_point3(Vec3::Z)
+    }
+
+    pub fn up(&self) -> Vec3 {
+        self.to_world.transform_vector3(Vec3::Y).normalize()
+    }
+
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height as f32
+    }
+
+    /// The horizontal full field of view in degrees, converted from `fov` / `fov_axis` exactly as
+    /// Mitsuba's `parse_fov` does (Mitsuba stores only the x angle).
+    pub fn fov_x(&self) -> f32 {
+        let aspect = self.aspect() as f64;
+        let axis = match self.fov_axis {
+            FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
+            FovAxis::Smaller => FovAxis::X,
+            FovAxis::Larger if aspect > 1.0 => FovAxis::X,
+            FovAxis::Larger => FovAxis::Y,
+            a => a,
+        };
+        let fov = self.fov as f64;
+        let x = match axis {
+            FovAxis::Y => {
+                2.0 * ((0.5 * fov.to_radians()).tan() * aspect)
+                    .atan()
+                    .to_degrees()
+            }
+            FovAxis::Diagonal => {
+                let diagonal = 2.0 * (0.5 * fov.to_radians()).tan();
+                let width = diagonal / (1.0 + 1.0 / (aspect * aspect)).sqrt();
+                2.0 * (width * 0.5).atan().to_degrees()
+            }
+            _ => fov,
+        };
+        x as f32
+    }
+
+    /// Tangents of the half angles along image x and y.
+    pub fn tan_half_fov(&self) -> (f32, f32) {
+        let tx = (0.5 * self.fov_x().to_radians()).tan();
+        (tx, tx / self.aspect())
+    }
+
+    pub fn frame(&self) -> CameraFrame {
+        let (tx, ty) = self.tan_half_fov();
+        // Camera x points left, so image-right is -x.
+        CameraFrame {
+            origin: self.origin(),
+            forward: self.to_world.transform_vector3(Vec3::Z),
+            right: self.to_world.transform_vector3(Vec3::new(-tx, 0.0, 0.0)),
+            up: self.to_world.transform_vector3(Vec3::new(0.0, ty, 0.0)),
+        }
+    }
+
+    /// Unit world direction through film point `(sx, sy)` in `[0,1]^2` (y down).
+    pub fn ray_direction(&self, sx: f32, sy: f32) -> Vec3 {
+        let f = self.frame();
+        (f.forward + (2.0 * sx - 1.0) * f.right + (1.0 - 2.0 * sy) * f.up).normalize()
+    }
+}
+
+/// Mitsuba's `Transform4f::look_at`: columns (left, up', dir, origin) with
+/// left = normalize(cross(up, dir)), up' = cross(dir, left).
+pub fn look_at_matrix(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
+    let dir = (target - origin).try_normalize()?;
+    let left = up.normalize_or_zero().cross(dir).try_normalize()?;
+    let new_up = dir.cross(left);
+    Some(Mat4::from_cols(
+        left.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        origin.extend(1.0),
+    ))
+}

@@ -1,0 +1,41 @@
+//! Scene data for the Cohort path tracer (host only, no GPU code).
+//!
+//! Data flow:
+//! ```text
+//! Mitsuba XML (mitsuba/) ─┐   OBJ (obj.rs), PLY (ply.rs), analytic shapes (shapes.rs)
+//!                         ├─► TriMesh ─► SceneBuilder ─► Scene (scene.rs: camera, triangles, materials)
+//! embedded generators ────┘                                  │
+//!                                                            ▼
+//!                                  bvh/: obvhs PLOC BVH2 ─► GpuBvh { nodes, triangles } + GpuMaterial
+//!                                                            │  (bytemuck, std430/WGSL layouts)
+//!                                                            ▼
+//!                                  renderer kernels (other crates); host reference traversal here
+//! ```
+//! `morton.rs` gives the pixel order the renderer lays its rays out in.
+
+pub mod builder;
+pub mod bvh;
+pub mod camera;
+pub mod embedded;
+pub mod error;
+pub mod material;
+pub mod mesh;
+pub mod mitsuba;
+pub mod morton;
+pub mod obj;
+pub mod ply;
+pub mod scene;
+pub mod shapes;
+
+pub use builder::{Added, SceneBuilder, Shading};
+pub use bvh::{
+    brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, BvhError, GpuBvh,
+    GpuBvhNode, GpuTriangle, Hit,
+};
+pub use camera::{Camera, CameraFrame, FovAxis};
+pub use error::{ErrorKind, Location, Position, SceneError, Warning};
+pub use material::{Bsdf, GpuMaterial, Material};
+pub use mesh::TriMesh;
+pub use mitsuba::{load_mitsuba, load_mitsuba_str, load_mitsuba_with_params, Loaded};
+pub use morton::{morton2d_decode, morton2d_encode, morton_pixel_order};
+pub use scene::{Integrator, Object, Scene, SceneStats, Triangles};

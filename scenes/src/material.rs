@@ -1,0 +1,183 @@
+//! Surface materials of a [`crate::Scene`] (the Mitsuba BSDF subset the renderer implements) and
+//! their packed GPU form, uploaded next to the BVH arrays and indexed by each triangle's material.
+
+use glam::Vec3;
+
+/// The scattering part of a material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    /// Lambertian. One-sided, like Mitsuba: a hit on the back reflects nothing unless the material
+    /// is [`Material::two_sided`].
+    Diffuse { reflectance: Vec3 },
+    /// Perfect mirror (Mitsuba `conductor` with `material` = none: Fresnel factor 1).
+    Conductor { specular_reflectance: Vec3 },
+    /// GGX microfacet conductor, isotropic, no Fresnel (`material` = none).
+    RoughConductor {
+        alpha: f32,
+        specular_reflectance: Vec3,
+    },
+    /// Smooth glass. Inside is the side the face normal points away from.
+    Dielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        /// Mitsuba's optional factors; the stanford-like scene sets them to 0.8 ("all albedos 0.8").
+        specular_reflectance: Vec3,
+        specular_transmittance: Vec3,
+    },
+}
+
+/// A BSDF plus, optionally, an area emitter on the same surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    pub bsdf: Bsdf,
+    /// Mitsuba `twosided`: the back side scatters like the front. Meaningless for dielectrics.
+    pub two_sided: bool,
+    /// Radiance of a Mitsuba `area` emitter: emitted only on the front (face-normal) side.
+    pub emission: Option<Vec3>,
+}
+
+impl Material {
+    pub fn diffuse(reflectance: Vec3) -> Self {
+        Material {
+            bsdf: Bsdf::Diffuse { reflectance },
+            two_sided: false,
+            emission: None,
+        }
+    }
+
+    pub fn diffuse_two_sided(reflectance: Vec3) -> Self {
+        Material {
+            two_sided: true,
+            ..Material::diffuse(reflectance)
+        }
+    }
+
+    pub fn mirror(specular_reflectance: Vec3) -> Self {
+        Material {
+            bsdf: Bsdf::Conductor {
+                specular_reflectance,
+            },
+            two_sided: false,
+            emission: None,
+        }
+    }
+
+    pub fn rough_conductor(alpha: f32, specular_reflectance: Vec3) -> Self {
+        Material {
+            bsdf: Bsdf::RoughConductor {
+                alpha,
+                specular_reflectance,
+            },
+            two_sided: false,
+            emission: None,
+        }
+    }
+
+    pub fn glass(int_ior: f32, ext_ior: f32, factor: Vec3) -> Self {
+        Material {
+            bsdf: Bsdf::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance: factor,
+                specular_transmittance: factor,
+            },
+            two_sided: false,
+            emission: None,
+        }
+    }
+
+    /// A one-sided area light with a black diffuse BSDF, so a path that hits it ends there (the
+    /// convention of the reference scenes).
+    pub fn emitter(radiance: Vec3) -> Self {
+        Material {
+            emission: Some(radiance),
+            ..Material::diffuse(Vec3::ZERO)
+        }
+    }
+
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self.bsdf, Bsdf::Diffuse { .. })
+    }
+
+    pub fn to_gpu(&self) -> GpuMaterial {
+        let (kind, color, transmittance, param) = match self.bsdf {
+            Bsdf::Diffuse { reflectance } => (GpuMaterial::DIFFUSE, reflectance, Vec3::ZERO, 0.0),
+            Bsdf::Conductor {
+                specular_reflectance,
+            } => (
+                GpuMaterial::CONDUCTOR,
+                specular_reflectance,
+                Vec3::ZERO,
+                0.0,
+            ),
+            Bsdf::RoughConductor {
+                alpha,
+                specular_reflectance,
+            } => (
+                GpuMaterial::ROUGH_CONDUCTOR,
+                specular_reflectance,
+                Vec3::ZERO,
+                alpha,
+            ),
+            Bsdf::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => (
+                GpuMaterial::DIELECTRIC,
+                specular_reflectance,
+                specular_transmittance,
+                int_ior / ext_ior,
+            ),
+        };
+        let mut flags = 0;
+        if self.two_sided {
+            flags |= GpuMaterial::FLAG_TWO_SIDED;
+        }
+        if self.emission.is_some() {
+            flags |= GpuMaterial::FLAG_EMITTER;
+        }
+        GpuMaterial {
+            color: color.to_array(),
+            kind,
+            emission: self.emission.unwrap_or(Vec3::ZERO).to_array(),
+            flags,
+            transmittance: transmittance.to_array(),
+            param,
+        }
+    }
+}
+
+/// Packed material, 48 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
+/// 16-byte slot):
+///
+/// | offset | field | meaning |
+/// |---|---|---|
+/// | 0 | `color: [f32;3]` | diffuse reflectance, or specular reflectance (conductors, dielectric) |
+/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3 |
+/// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter |
+/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, else zero |
+/// | 44 | `param: f32` | GGX alpha (rough conductor) or relative IOR int/ext (dielectric) |
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuMaterial {
+    pub color: [f32; 3],
+    pub kind: u32,
+    pub emission: [f32; 3],
+    pub flags: u32,
+    pub transmittance: [f32; 3],
+    pub param: f32,
+}
+
+impl GpuMaterial {
+    pub const DIFFUSE: u32 = 0;
+    pub const CONDUCTOR: u32 = 1;
+    pub const ROUGH_CONDUCTOR: u32 = 2;
+    pub const DIELECTRIC: u32 = 3;
+    pub const FLAG_TWO_SIDED: u32 = 1;
+    pub const FLAG_EMITTER: u32 = 2;
+}
+
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 48);

@@ -1,0 +1,199 @@
+//! The scene as plain data: what every source (Mitsuba XML loader, embedded generators) produces
+//! and what the BVH builder and the renderer's upload code consume. Geometry is a flat
+//! structure-of-arrays triangle soup in world space, because the GPU wants exactly that after the
+//! BVH has reordered it; nothing here knows about files or GPUs.
+
+use glam::Vec3;
+use std::ops::Range;
+
+use crate::camera::Camera;
+use crate::material::Material;
+
+/// World-space triangles, structure-of-arrays, NOT indexed: vertex `k` of triangle `i` is
+/// `positions[3 * i + k]`.
+///
+/// Non-indexed because the BVH reorders triangles into leaf order and the traversal kernel then
+/// reads three consecutive vertices; an index buffer would add one dependent load per hit test and
+/// save memory only on meshes we never render large enough for it to matter.
+///
+/// The geometric (face) normal is always `normalize(cross(v1 - v0, v2 - v0))` (Mitsuba's rule, after
+/// `to_world`): it decides one-sidedness (diffuse/conductor back faces are black, area lights emit
+/// only on its side) and inside/outside for dielectrics. Counter-clockwise winding is the front.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Triangles {
+    /// 3 per triangle.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, 3 per triangle, or `None` when every triangle shades with its face
+    /// normal. When only some meshes are smooth, the flat ones carry their face normal three times,
+    /// so the renderer never needs a per-triangle branch.
+    pub normals: Option<Vec<Vec3>>,
+    /// Index into [`Scene::materials`], 1 per triangle.
+    pub materials: Vec<u32>,
+}
+
+impl Triangles {
+    pub fn len(&self) -> usize {
+        self.materials.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.materials.is_empty()
+    }
+
+    pub fn vertices(&self, i: usize) -> [Vec3; 3] {
+        [
+            self.positions[3 * i],
+            self.positions[3 * i + 1],
+            self.positions[3 * i + 2],
+        ]
+    }
+
+    /// Unit face normal (front side), Mitsuba's convention.
+    pub fn face_normal(&self, i: usize) -> Vec3 {
+        let [a, b, c] = self.vertices(i);
+        (b - a).cross(c - a).normalize()
+    }
+
+    pub fn area(&self, i: usize) -> f32 {
+        let [a, b, c] = self.vertices(i);
+        0.5 * (b - a).cross(c - a).length()
+    }
+}
+
+/// One shape of the source (a `<shape>` element, or a part of a generated scene): a contiguous run
+/// of triangles with one material. Kept for statistics, debugging and light bookkeeping; the
+/// renderer itself only needs the per-triangle material index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub triangles: Range<u32>,
+    pub material: u32,
+}
+
+/// Integrator settings read from the scene (Mitsuba `path`); the renderer decides what to honour
+/// (it uses a fixed Russian roulette, see PAPER.md), but keeps them so a reference run can match.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Integrator {
+    /// -1 = unlimited (Mitsuba's convention).
+    pub max_depth: i32,
+    pub rr_depth: i32,
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        // Mitsuba 3's `path` defaults.
+        Integrator {
+            max_depth: -1,
+            rr_depth: 5,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    pub triangles: Triangles,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    /// Radiance of rays that leave the scene (Mitsuba `constant` emitter); black when absent.
+    pub environment: Vec3,
+    pub integrator: Integrator,
+    /// The sampler's sample count from the file; a placeholder the renderer may override.
+    pub sample_count: u32,
+}
+
+/// Summary numbers, for logs and tests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneStats {
+    pub triangles: usize,
+    pub materials: usize,
+    pub objects: usize,
+    /// Objects whose material emits.
+    pub emitters: usize,
+    pub emissive_triangles: usize,
+    /// Summed area of the emissive triangles.
+    pub emissive_area: f32,
+    pub has_environment: bool,
+    pub has_vertex_normals: bool,
+    pub bounds_min: Vec3,
+    pub bounds_max: Vec3,
+}
+
+impl Scene {
+    /// An empty scene with the given camera; sources fill it through [`crate::SceneBuilder`].
+    pub fn new(camera: Camera) -> Self {
+        Scene {
+            camera,
+            triangles: Triangles::default(),
+            materials: Vec::new(),
+            objects: Vec::new(),
+            environment: Vec3::ZERO,
+            integrator: Integrator::default(),
+            sample_count: 1,
+        }
+    }
+
+    /// Packed material table, indexed by [`crate::GpuTriangle::material`].
+    pub fn gpu_materials(&self) -> Vec<crate::GpuMaterial> {
+        self.materials.iter().map(Material::to_gpu).collect()
+    }
+
+    pub fn material_of(&self, triangle: usize) -> &Material {
+        &self.materials[self.triangles.materials[triangle] as usize]
+    }
+
+    pub fn stats(&self) -> SceneStats {
+        let mut emissive_triangles = 0;
+        let mut emissive_area = 0.0;
+        for i in 0..self.triangles.len() {
+            if self.material_of(i).emission.is_some() {
+                emissive_triangles += 1;
+                emissive_area += self.triangles.area(i);
+            }
+        }
+        let (bounds_min, bounds_max) = self.triangles.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        SceneStats {
+            triangles: self.triangles.len(),
+            materials: self.materials.len(),
+            objects: self.objects.len(),
+            emitters: self
+                .objects
+                .iter()
+                .filter(|o| self.materials[o.material as usize].emission.is_some())
+                .count(),
+            emissive_triangles,
+            emissive_area,
+            has_environment: self.environment != Vec3::ZERO,
+            has_vertex_normals: self.triangles.normals.is_some(),
+            bounds_min,
+            bounds_max,
+        }
+    }
+}
+
+impl std::fmt::Display for SceneStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} triangles, {} materials, {} objects, {} emitters ({} emissive triangles, area {:.3}), \
+             environment {}, vertex normals {}, bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}]",
+            self.triangles,
+            self.materials,
+            self.objects,
+            self.emitters,
+            self.emissive_triangles,
+            self.emissive_area,
+            if self.has_environment { "yes" } else { "no" },
+            if self.has_vertex_normals { "yes" } else { "no" },
+            self.bounds_min.x,
+            self.bounds_min.y,
+            self.bounds_min.z,
+            self.bounds_max.x,
+            self.bounds_max.y,
+            self.bounds_max.z,
+        )
+    }
+}
