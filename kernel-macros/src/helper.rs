@@ -10,7 +10,7 @@ use quote::{format_ident, quote, quote_spanned};
 use syn::spanned::Spanned;
 use syn::{FnArg, Pat, Signature, Type};
 
-use crate::rewrite::{err, Bind, Rewriter};
+use crate::rewrite::{err_at, Bind, Rewriter};
 
 struct IrSig {
     params: Vec<TokenStream>,
@@ -36,11 +36,11 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
     };
     for arg in &sig.inputs {
         let FnArg::Typed(pt) = arg else {
-            return err(arg.span(), "kernel helpers take no `self`; use an associated function (`fn f(x: T)`)");
+            return err_at(arg, "kernel helpers take no `self`; use an associated function (`fn f(x: T)`)");
         };
         let (name, mutable) = match &*pt.pat {
             Pat::Ident(i) => (i.ident.clone(), i.mutability.is_some()),
-            other => return err(other.span(), "helper parameters bind one name each"),
+            other => return err_at(other, "helper parameters bind one name each"),
         };
         let span = pt.ty.span();
         match &*pt.ty {
@@ -52,7 +52,8 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
                     out.binds.push((name.to_string(), Bind::Root));
                 }
                 elem if r.mutability.is_some() => {
-                    out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Place<#elem> });
+                    out.params.push(quote_spanned! {span=> #name: impl ::cohort::ir::AsPlace<Target = #elem> });
+                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::AsPlace::as_place(&#name); });
                     out.arg_names.push(name.clone());
                     out.binds.push((name.to_string(), Bind::Root));
                 }
@@ -80,8 +81,11 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
     if let syn::ReturnType::Type(_, t) = &sig.output {
         out.ret = quote_spanned! {t.span()=> ::cohort::ir::Val<#t> };
     }
-    if sig.asyncness.is_some() || sig.unsafety.is_some() {
-        return err(sig.span(), "kernel helpers are plain `fn`s (not async or unsafe)");
+    if let Some(a) = &sig.asyncness {
+        return err_at(a, "kernel helpers are plain `fn`s (not async or unsafe)");
+    }
+    if let Some(u) = &sig.unsafety {
+        return err_at(u, "kernel helpers are plain `fn`s (not async or unsafe)");
     }
     Ok(out)
 }
@@ -105,8 +109,12 @@ fn ir_body(sig: &Signature, block: &syn::Block, key: TokenStream, extra_generics
     let tokens = if s.inline {
         quote! { #(#prelude)* #body }
     } else {
-        let conv: Vec<_> = prelude.iter().filter(|t| t.to_string().contains("ToVal")).collect();
-        let rebind: Vec<_> = prelude.iter().filter(|t| !t.to_string().contains("ToVal")).collect();
+        let is_conv = |t: &&TokenStream| {
+            let s = t.to_string();
+            s.contains("ToVal") || s.contains("AsPlace")
+        };
+        let conv: Vec<_> = prelude.iter().filter(is_conv).collect();
+        let rebind: Vec<_> = prelude.iter().filter(|t| !is_conv(t)).collect();
         let args = &s.arg_names;
         let lits: Vec<String> = args.iter().map(|a| a.to_string()).collect();
         quote! {
@@ -169,7 +177,7 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
     for item in &t.items {
         if let syn::TraitItem::Fn(m) = item {
             if !is_assoc_fn(&m.sig) {
-                return err(m.sig.span(), "kernel trait methods take no `self`: strategies are types with associated functions and constants");
+                return err_at(m.sig.inputs.first(), "kernel trait methods take no `self`: strategies are types with associated functions and constants");
             }
             let ir_name = format_ident!("__ir_{}", m.sig.ident);
             let s = ir_signature(&m.sig)?;
@@ -198,14 +206,15 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
 
 pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
     let Some((_, trait_path, _)) = &i.trait_ else {
-        return err(i.span(), "`#[kernel_impl]` goes on `impl Trait for Type` of a `#[kernel_trait]`");
+        let (it, ty) = (&i.impl_token, &i.self_ty);
+        return err_at(quote!(#it #ty), "`#[kernel_impl]` goes on `impl Trait for Type` of a `#[kernel_trait]`");
     };
     let trait_name = trait_path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
     let mut extra = Vec::new();
     for item in &i.items {
         if let syn::ImplItem::Fn(m) = item {
             if !is_assoc_fn(&m.sig) {
-                return err(m.sig.span(), "kernel trait methods take no `self`");
+                return err_at(m.sig.inputs.first(), "kernel trait methods take no `self`");
             }
             let ir_name = format_ident!("__ir_{}", m.sig.ident);
             let display = format!("{}_{}", trait_name, m.sig.ident);

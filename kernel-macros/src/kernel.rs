@@ -3,13 +3,12 @@
 //! the typed `launch` functions.
 
 use proc_macro2::TokenStream;
-use quote::{format_ident, quote, quote_spanned};
+use quote::{format_ident, quote, quote_spanned, ToTokens};
 use std::collections::HashSet;
 use syn::parse::{Parse, ParseStream};
-use syn::spanned::Spanned;
 use syn::{FnArg, ItemFn, Pat, Type};
 
-use crate::rewrite::{err, Bind, Rewriter};
+use crate::rewrite::{err_at, Bind, Rewriter};
 use crate::uniformity;
 
 pub struct KernelAttr {
@@ -93,6 +92,30 @@ const BUILTINS: &[&str] = &[
     "workgroup_size", "subgroup_size", "subgroup_lane", "subgroup_invocation_id", "subgroup_id", "num_subgroups",
 ];
 
+/// The builtins whose value is a `glam::UVec3`; the others are `u32`.
+const UVEC3_BUILTINS: &[&str] = &["global_id", "local_id", "workgroup_id", "num_workgroups"];
+
+/// Checks the declared type of a `#[builtin(..)]` parameter syntactically (`u32`, or
+/// `UVec3` under any path), so that a wrong type is reported as such rather than as a
+/// mismatch inside the generated code.
+fn check_builtin_type(builtin: &str, ty: &Type) -> syn::Result<()> {
+    let want = if UVEC3_BUILTINS.contains(&builtin) { "UVec3" } else { "u32" };
+    let ok = match ty {
+        Type::Path(p) if p.qself.is_none() => {
+            p.path.segments.last().is_some_and(|s| s.arguments.is_empty() && s.ident == want)
+        }
+        Type::Paren(p) => return check_builtin_type(builtin, &p.elem),
+        Type::Group(g) => return check_builtin_type(builtin, &g.elem),
+        _ => false,
+    };
+    if ok {
+        return Ok(());
+    }
+    let full = if want == "UVec3" { "UVec3` (`glam::UVec3`)" } else { "u32`" };
+    let found = ty.to_token_stream().to_string().replace(" :: ", "::").replace(":: ", "::").replace("& ", "&").replace(" <", "<").replace("< ", "<").replace(" >", ">");
+    err_at(ty, format!("builtin `{builtin}` is `{full}, not `{found}`"))
+}
+
 fn is_atomic(t: &Type) -> bool {
     if let Type::Path(p) = t {
         if let Some(s) = p.path.segments.last() {
@@ -104,11 +127,11 @@ fn is_atomic(t: &Type) -> bool {
 
 fn classify(arg: &mut FnArg) -> syn::Result<Param> {
     let FnArg::Typed(pt) = arg else {
-        return err(arg.span(), "kernels take no `self`");
+        return err_at(arg, "kernels take no `self`");
     };
     let name = match &*pt.pat {
         Pat::Ident(i) => i.ident.clone(),
-        other => return err(other.span(), "kernel parameters bind one name each"),
+        other => return err_at(other, "kernel parameters bind one name each"),
     };
     let mut builtin = None;
     let mut workgroup = false;
@@ -118,8 +141,9 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
             let id: syn::Ident = a.parse_args()?;
             let s = id.to_string();
             if !BUILTINS.contains(&s.as_str()) {
-                return err(id.span(), format!("unknown builtin `{s}`; expected one of: {}", BUILTINS.join(", ")));
+                return err_at(&id, format!("unknown builtin `{s}`; expected one of: {}", BUILTINS.join(", ")));
             }
+            check_builtin_type(&s, &pt.ty)?;
             builtin = Some(if s == "subgroup_invocation_id" { format_ident!("subgroup_lane", span = id.span()) } else { id });
         } else if a.path().is_ident("workgroup") {
             workgroup = true;
@@ -135,7 +159,7 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
             Type::Reference(r) => {
                 if workgroup {
                     if r.mutability.is_none() {
-                        return err(r.span(), "workgroup memory parameters are `&mut T`");
+                        return err_at(r, "workgroup memory parameters are `&mut T`");
                     }
                     ParamKind::Workgroup((*r.elem).clone())
                 } else if let Type::Slice(s) = &*r.elem {
@@ -143,14 +167,14 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
                     let writable = r.mutability.is_some() || is_atomic(&elem);
                     ParamKind::Storage { elem, writable }
                 } else if r.mutability.is_some() {
-                    return err(r.span(), "`&mut T` kernel parameters must be `#[workgroup]` memory; storage buffers are `&mut [T]`");
+                    return err_at(r, "`&mut T` kernel parameters must be `#[workgroup]` memory; storage buffers are `&mut [T]`");
                 } else {
                     ParamKind::Uniform((*r.elem).clone())
                 }
             }
             other => {
-                return err(
-                    other.span(),
+                return err_at(
+                    other,
                     "kernel parameters are storage buffers (`&[T]`, `&mut [T]`), uniforms (`&T`), `#[builtin(..)]` values or `#[workgroup]` memory",
                 )
             }
@@ -165,10 +189,13 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         syn::ReturnType::Type(_, t) => Some(t),
         _ => None,
     } {
-        return err(r.span(), "kernels return nothing; write results to a buffer");
+        return err_at(r, "kernels return nothing; write results to a buffer");
     }
-    if f.sig.asyncness.is_some() || f.sig.unsafety.is_some() {
-        return err(f.sig.span(), "kernels are plain `fn`s (not async or unsafe)");
+    if let Some(a) = &f.sig.asyncness {
+        return err_at(a, "kernels are plain `fn`s (not async or unsafe)");
+    }
+    if let Some(u) = &f.sig.unsafety {
+        return err_at(u, "kernels are plain `fn`s (not async or unsafe)");
     }
     let mut params = Vec::new();
     for arg in f.sig.inputs.iter_mut() {
@@ -191,7 +218,9 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             ParamKind::Uniform(_) => {
                 up.uniform_buffers.insert(n);
             }
-            _ => {}
+            ParamKind::Storage { .. } | ParamKind::Workgroup(_) => {
+                up.memory.insert(n);
+            }
         }
     }
     uniformity::check(&f.block, &up)?;
@@ -335,6 +364,23 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
                 let spec = spec(device, ::core::option::Option::None);
                 launch_spec #turbofish (device, &spec, grid, #(#launch_names),*)
+            }
+
+            /// Records one specialisation of the kernel into `batch` (submitted later
+            /// with the batch's other dispatches, in order).
+            pub fn record #launch_generics (
+                batch: &mut ::cohort::runtime::Batch<'_>,
+                spec: &::cohort::Spec,
+                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                #(#launch_params),*
+            ) -> ::cohort::Result<()> #where_static {
+                let device = batch.device();
+                let art = artifact #turbofish (spec)?;
+                #(#uniform_uploads)*
+                let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
+                #(#grid_uploads)*
+                let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
+                ::core::result::Result::Ok(batch.dispatch(&art, &__args, dispatch)?)
             }
 
             /// Runs one specialisation of the kernel.

@@ -220,7 +220,7 @@ impl Device {
             Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new()),
             Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new()),
         };
-        Batch { pending }
+        Batch { pending, device: self }
     }
 
     /// Vulkan validation-layer errors and warnings collected since the last call (wgpu:
@@ -253,9 +253,15 @@ enum Pending<'d> {
 /// Dispatches recorded for one submission. Nothing reaches the GPU before `submit`.
 pub struct Batch<'d> {
     pending: Pending<'d>,
+    device: &'d Device,
 }
 
-impl Batch<'_> {
+impl<'d> Batch<'d> {
+    /// The device the batch records for (to allocate buffers its dispatches use).
+    pub fn device(&self) -> &'d Device {
+        self.device
+    }
+
     pub fn dispatch(
         &mut self,
         kernel: &KernelArtifact,

@@ -65,6 +65,8 @@ pub(crate) struct Ctx {
     pub next_binding: u32,
     pub bindings: Vec<cohort_runtime::Binding>,
     pub group_share_sites: u32,
+    /// Depth of helper bodies being inlined into their caller (no `return` there).
+    pub inline_depth: u32,
     /// Entry-point values computed in the prologue, so they dominate every use.
     pub prologue: Prologue,
 }
@@ -145,6 +147,7 @@ impl Ctx {
             next_binding: 0,
             bindings: Vec::new(),
             group_share_sites: 0,
+            inline_depth: 0,
             prologue: Prologue::default(),
         }
     }

@@ -108,11 +108,25 @@ pub fn continue_() {
 /// `return;` (or the end of a kernel). In an inlined helper this is a compile error
 /// reported by the front end before we get here.
 pub fn return_() {
-    with(|c| c.stmt(Statement::Return { value: None }));
+    with(|c| {
+        check_not_inlined(c.inline_depth);
+        c.stmt(Statement::Return { value: None })
+    });
 }
 
 pub fn return_value<T>(v: Val<T>) {
-    with(|c| c.stmt(Statement::Return { value: Some(v.h) }));
+    with(|c| {
+        check_not_inlined(c.inline_depth);
+        c.stmt(Statement::Return { value: Some(v.h) })
+    });
+}
+
+fn check_not_inlined(depth: u32) {
+    assert!(
+        depth == 0,
+        "early `return` in a helper that is inlined because it receives workgroup or storage \
+         memory; end the helper with its value instead"
+    );
 }
 
 /// `a && b`, evaluating `b` only when `a` holds (it may index out of bounds otherwise).

@@ -110,6 +110,14 @@ pub fn function<K: 'static + ?Sized, P: Params, R: Return>(
     args: P,
     body: impl FnOnce(P) -> R,
 ) -> R {
+    // WGSL functions cannot take pointers into workgroup or storage memory, so a call
+    // that passes one is inlined: the body is recorded in the caller.
+    if args.handles().iter().any(|h| points_outside_function(*h)) {
+        with(|c| c.inline_depth += 1);
+        let r = body(args);
+        with(|c| c.inline_depth -= 1);
+        return r;
+    }
     let key = (TypeId::of::<K>(), name);
     let cached = with(|c| c.fn_cache.get(&key).copied());
     let fh = match cached {
@@ -179,4 +187,18 @@ fn fn_name<K: ?Sized>(name: &str) -> String {
         }
         None => name.to_string(),
     }
+}
+
+fn points_outside_function(h: Handle<Expression>) -> bool {
+    with(|c| {
+        let exprs = &c.f().func.expressions;
+        let mut cur = h;
+        loop {
+            match exprs[cur] {
+                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => cur = base,
+                Expression::GlobalVariable(_) => return true,
+                _ => return false,
+            }
+        }
+    })
 }

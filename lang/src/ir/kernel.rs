@@ -336,3 +336,9 @@ impl<T: GpuType> crate::ir::val::AutoDeref for Workgroup<T> {
         self.as_place().get()
     }
 }
+
+impl<T: GpuType> crate::ir::val::ToVal<T> for Uniform<T> {
+    fn to_val(self) -> Val<T> {
+        self.get()
+    }
+}

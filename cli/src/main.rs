@@ -1,0 +1,170 @@
+//! `cohort`: the command-line front of the path tracer. Parses options (clap), loads
+//! an embedded or Mitsuba XML scene (`cohort-scenes`), renders it (`cohort-render`)
+//! with a progress bar (indicatif) and writes the outputs atomically.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Parser, Subcommand};
+use cohort::runtime::{BackendKind, Device};
+use cohort_render::{output, Algorithm, Budget, RenderOptions, Renderer};
+use cohort_scenes::embedded;
+
+#[derive(Parser)]
+#[command(name = "cohort", version, about = "Coherent-ray wavefront path tracer written in the Cohort GPU kernel language")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene.
+    Render(RenderArgs),
+    /// List the embedded scenes.
+    Scenes,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Embedded scene name (see `cohort scenes`) or a Mitsuba 3 XML file.
+    #[arg(long, default_value = embedded::DEFAULT)]
+    scene: String,
+    /// `wgpu` (WGSL) or `vulkan` (SPIR-V through ash); default: the best found.
+    #[arg(long)]
+    backend: Option<String>,
+    /// Sampling strategy for diffuse bounces.
+    #[arg(long, default_value = "normal")]
+    algorithm: String,
+    /// Image width (default: the scene's film).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default: the scene's film).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Completed paths per pixel.
+    #[arg(long, conflicts_with = "time")]
+    paths: Option<u32>,
+    /// Budget of accumulated GPU kernel time (traverse + extend + compact), in seconds.
+    #[arg(long)]
+    time: Option<f64>,
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    /// Linear EXR output.
+    #[arg(long, default_value = "render.exr")]
+    out: PathBuf,
+    /// Tone-mapped sRGB PNG output.
+    #[arg(long, default_value = "render.png")]
+    png: PathBuf,
+    /// Exposure of the PNG, in stops.
+    #[arg(long, default_value_t = 0.0)]
+    exposure: f32,
+    /// Statistics as JSON.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Skip stream compaction (the paper's `(NO)` variants).
+    #[arg(long)]
+    no_compact: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Scenes => {
+            for name in embedded::names() {
+                println!("{name:<12} {}", embedded::description(name).unwrap_or(""));
+            }
+            Ok(())
+        }
+        Command::Render(a) => render(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_scene(name: &str) -> Result<cohort_scenes::Scene, String> {
+    if let Some(s) = embedded::load(name) {
+        return Ok(s);
+    }
+    if name.ends_with(".xml") || std::path::Path::new(name).exists() {
+        let loaded = cohort_scenes::load_mitsuba(name).map_err(|e| e.to_string())?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        return Ok(loaded.scene);
+    }
+    Err(format!("unknown scene `{name}`: not an embedded scene ({}) nor an XML file", embedded::names().join(", ")))
+}
+
+fn render(a: RenderArgs) -> Result<(), String> {
+    let algorithm = Algorithm::parse(&a.algorithm).ok_or_else(|| format!("unknown algorithm `{}` (available: normal)", a.algorithm))?;
+    let budget = match (a.paths, a.time) {
+        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => return Err(format!("--time {t} must be a positive number of seconds")),
+        (_, Some(t)) => Budget::KernelTime(Duration::from_secs_f64(t)),
+        (Some(0), _) => return Err("--paths must be at least 1".into()),
+        (Some(p), None) => Budget::PathsPerPixel(p),
+        (None, None) => Budget::PathsPerPixel(64),
+    };
+    let scene = load_scene(&a.scene)?;
+    let size = match (a.width, a.height) {
+        (None, None) => None,
+        (w, h) => Some((w.unwrap_or(scene.camera.width), h.unwrap_or(scene.camera.height))),
+    };
+    let device = match a.backend.as_deref() {
+        None => Device::best(),
+        Some(b) => Device::new(BackendKind::parse(b).ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?),
+    }
+    .map_err(|e| e.to_string())?;
+    let info = device.info().clone();
+    let opts = RenderOptions { algorithm, budget, seed: a.seed, size, compact: !a.no_compact, ..Default::default() };
+    let mut renderer = Renderer::new(&device, &scene, opts).map_err(|e| e.to_string())?;
+    let (w, h) = renderer.size();
+    eprintln!("{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}", a.scene, scene.triangles.len(), info.adapter_name, info.backend.name(), algorithm.name());
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let (image, stats) = renderer
+        .render(|frac, s| {
+            bar.set_position((frac * 1000.0) as u64);
+            bar.set_message(format!("{:.2} paths/pixel, {} iterations", s.paths_per_pixel(), s.iterations));
+        })
+        .map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    output::write_exr(&a.out, &image).map_err(|e| e.to_string())?;
+    output::write_png(&a.png, &image, a.exposure).map_err(|e| e.to_string())?;
+    let k = stats.kernel;
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    println!("scene          {} ({w}x{h}, {} triangles)", a.scene, scene.triangles.len());
+    println!("device         {} [{}], subgroup {}", info.adapter_name, info.backend.name(), info.subgroup_size);
+    println!("algorithm      {}{}", algorithm.name(), if a.no_compact { " (no compaction)" } else { "" });
+    println!("paths/pixel    {:.2} ({} paths, {} iterations)", stats.paths_per_pixel(), stats.completed_paths, stats.iterations);
+    println!("kernel time    {:.1} ms: traverse {:.1}, extend {:.1}, compact {:.1}", ms(k.total()), ms(k.traverse), ms(k.extend), ms(k.compact));
+    println!("paths/s        {:.3} M (per kernel second)", stats.paths_per_second() / 1e6);
+    println!("rays/s         {:.3} M (traversal)", stats.rays_per_second() / 1e6);
+    println!("wall           {:.2} s", stats.wall.as_secs_f64());
+    println!("mean radiance  {:.4} {:.4} {:.4}", image.mean().x, image.mean().y, image.mean().z);
+    println!("wrote          {} and {}", a.out.display(), a.png.display());
+    if let Some(path) = &a.stats {
+        let json = serde_json::json!({
+            "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
+            "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
+            "compaction": !a.no_compact, "seed": a.seed,
+            "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
+            "iterations": stats.iterations, "rays": stats.rays,
+            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "compact": ms(k.compact), "total": ms(k.total()) },
+            "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
+            "wall_s": stats.wall.as_secs_f64(),
+        });
+        output::write_text(path, &serde_json::to_string_pretty(&json).unwrap()).map_err(|e| e.to_string())?;
+        println!("stats          {}", path.display());
+    }
+    Ok(())
+}

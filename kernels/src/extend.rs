@@ -1,0 +1,193 @@
+//! Path extension (PAPER.md §3 kernel 1) and camera-ray generation.
+//!
+//! For each live ray: add the emission it reached (implicit path tracing: a path
+//! contributes when it hits an emitter or leaves the scene), then either continue the
+//! path with a new direction sampled from the BSDF (diffuse bounces through the
+//! strategy `S`) or, when it escaped, was absorbed or lost Russian roulette, add its
+//! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
+//! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
+
+use crate::layout::*;
+use crate::rng::{stream, uniform};
+use crate::sampling::{fresnel_dielectric, ggx_vndf, smith_g1, DiffuseSampler};
+use cohort::prelude::*;
+
+/// Camera ray through a random point of `pixel`: origin in xyz (w = tmin), direction.
+#[kernel_fn]
+pub fn camera_dir(f: &Frame, pixel: u32, key: u32) -> Vec3 {
+    let px = (pixel % f.width) as f32 + uniform(key, 0);
+    let py = (pixel / f.width) as f32 + uniform(key, 1);
+    let sx = px / f.width as f32;
+    let sy = py / f.height as f32;
+    (f.cam_forward + f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)).normalize()
+}
+
+/// Starts every slot: first camera ray, empty estimate, identity order.
+#[kernel(workgroup = 64)]
+pub fn init_paths(
+    #[builtin(global_index)] gi: u32,
+    f: &Frame,
+    slot_pixel: &[u32],
+    idrays: &mut [u32],
+    state: &mut [UVec4],
+    ray_o: &mut [Vec4],
+    ray_d: &mut [Vec4],
+    beta: &mut [Vec4],
+    radiance: &mut [Vec4],
+    accum: &mut [Vec4],
+) {
+    let g = gi as usize;
+    if gi >= f.slots {
+        return;
+    }
+    let pixel = slot_pixel[g];
+    let d = camera_dir(f, pixel, stream(f.seed, pixel, 0, 0));
+    idrays[g] = gi;
+    state[g] = UVec4::new(pixel, 0, 0, 0);
+    ray_o[g] = Vec4::new(f.cam_origin.x, f.cam_origin.y, f.cam_origin.z, 0.0);
+    ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
+    beta[g] = Vec4::ONE;
+    radiance[g] = Vec4::ZERO;
+    accum[g] = Vec4::ZERO;
+}
+
+/// Offset along the normal that keeps a new ray off the surface it leaves, scaled with
+/// the hit point's magnitude.
+#[kernel_fn]
+pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
+    let scale = 1e-4 * (1.0 + p.abs().max_element());
+    p + n * scale
+}
+
+#[kernel(workgroup = 64)]
+pub fn extend<S: DiffuseSampler>(
+    #[builtin(global_index)] gi: u32,
+    f: &Frame,
+    count: &[u32],
+    idrays: &[u32],
+    hits: &[Vec4],
+    tris: &[Triangle],
+    materials: &[Material],
+    state: &mut [UVec4],
+    ray_o: &mut [Vec4],
+    ray_d: &mut [Vec4],
+    beta: &mut [Vec4],
+    radiance: &mut [Vec4],
+    accum: &mut [Vec4],
+    flags: &mut [u32],
+    completed: &[AtomicU32],
+) {
+    let i = gi as usize;
+    if gi >= count[0] {
+        return;
+    }
+    let r = idrays[i] as usize;
+    let st = state[r];
+    if st.w & DONE != 0 {
+        flags[i] = 0;
+        return;
+    }
+    let pixel = st.x;
+    let path = st.y;
+    let bounce = st.z;
+    let key = stream(f.seed, pixel, path, bounce + 1);
+    let h = hits[r];
+    let tri = h.w.to_bits();
+    let d = ray_d[r].truncate();
+    let mut thr = beta[r].truncate();
+    let mut l = radiance[r].truncate();
+    let mut alive = false;
+    let mut new_o = Vec3::ZERO;
+    let mut new_d = Vec3::ZERO;
+    if tri == MISS {
+        l += thr * f.environment;
+    } else {
+        let t = tris[tri as usize];
+        let m = materials[t.material as usize];
+        let ng = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
+        let front = ng.dot(d) < 0.0;
+        let two_sided = m.flags & TWO_SIDED != 0;
+        let n = if front { ng } else { -ng };
+        let p = ray_o[r].truncate() + d * h.x;
+        if m.flags & EMITTER != 0 && (front || two_sided) {
+            l += thr * m.emission;
+        }
+        let u = Vec2::new(uniform(key, 2), uniform(key, 3));
+        if m.kind == DIFFUSE {
+            if (front || two_sided) && m.color.max_element() > 0.0 {
+                let s = S::sample(n, u);
+                new_d = s.truncate();
+                thr = thr * m.color * s.w;
+                new_o = offset_origin(p, n);
+                alive = true;
+            }
+        } else if m.kind == CONDUCTOR {
+            new_d = d - n * (2.0 * d.dot(n));
+            thr = thr * m.color;
+            new_o = offset_origin(p, n);
+            alive = true;
+        } else if m.kind == ROUGH_CONDUCTOR {
+            let fr = crate::sampling::frame(n);
+            let wo = fr.transpose() * -d;
+            let mn = ggx_vndf(wo, m.param, u);
+            let wi = mn * (2.0 * wo.dot(mn)) - wo;
+            if wi.z > 0.0 {
+                new_d = fr * wi;
+                thr = thr * m.color * smith_g1(wi.z, m.param);
+                new_o = offset_origin(p, n);
+                alive = true;
+            }
+        } else {
+            // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
+            let eta = if front { m.param } else { 1.0 / m.param };
+            let cos_i = -d.dot(n);
+            let fr = fresnel_dielectric(cos_i, eta);
+            if uniform(key, 4) < fr {
+                new_d = d + n * (2.0 * cos_i);
+                thr = thr * m.color;
+                new_o = offset_origin(p, n);
+            } else {
+                let inv = 1.0 / eta;
+                let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
+                new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
+                thr = thr * m.transmittance;
+                new_o = offset_origin(p, -n);
+            }
+            alive = true;
+        }
+        if alive && f.max_depth != 0 && bounce + 1 >= f.max_depth {
+            alive = false;
+        }
+        if alive && bounce + 1 >= f.rr_depth {
+            if uniform(key, 5) < f.rr_continue {
+                thr = thr / f.rr_continue;
+            } else {
+                alive = false;
+            }
+        }
+    }
+    if alive {
+        state[r] = UVec4::new(pixel, path, bounce + 1, 0);
+        ray_o[r] = new_o.extend(0.0);
+        ray_d[r] = new_d.extend(0.0);
+        beta[r] = thr.extend(0.0);
+        radiance[r] = l.extend(0.0);
+        flags[i] = 1;
+    } else {
+        accum[r] = accum[r] + l.extend(1.0);
+        completed[0].fetch_add(1, Ordering::Relaxed);
+        let next = path + 1;
+        let mut done = 0u32;
+        if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
+            done = DONE;
+            completed[1].fetch_add(1, Ordering::Relaxed);
+        }
+        let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
+        state[r] = UVec4::new(pixel, next, 0, done);
+        ray_o[r] = f.cam_origin.extend(0.0);
+        ray_d[r] = cd.extend(0.0);
+        beta[r] = Vec4::ONE;
+        radiance[r] = Vec4::ZERO;
+        flags[i] = 0;
+    }
+}

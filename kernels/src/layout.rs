@@ -1,0 +1,85 @@
+//! GPU data layouts shared by the kernels and the host: the scene (BVH nodes,
+//! triangles, materials, the same bytes as `cohort-scenes` produces) and the per-frame
+//! uniform.
+
+use cohort::prelude::*;
+
+/// Interior BVH2 node holding both children's boxes. Child references: bit 31 set means
+/// a leaf (bits 28..30 = count - 1, bits 0..27 = first triangle), else a node index.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct BvhNode {
+    pub lmin: Vec3,
+    pub left: u32,
+    pub lmax: Vec3,
+    pub right: u32,
+    pub rmin: Vec3,
+    pub pad0: u32,
+    pub rmax: Vec3,
+    pub pad1: u32,
+}
+
+/// A triangle in BVH leaf order: its three vertices, material and original index.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Triangle {
+    pub v0: Vec3,
+    pub material: u32,
+    pub v1: Vec3,
+    pub original: u32,
+    pub v2: Vec3,
+    pub pad: u32,
+}
+
+/// Material kinds (`Material::kind`).
+pub const DIFFUSE: u32 = 0;
+pub const CONDUCTOR: u32 = 1;
+pub const ROUGH_CONDUCTOR: u32 = 2;
+pub const DIELECTRIC: u32 = 3;
+/// `Material::flags` bits.
+pub const TWO_SIDED: u32 = 1;
+pub const EMITTER: u32 = 2;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Material {
+    /// Diffuse reflectance, or specular reflectance.
+    pub color: Vec3,
+    pub kind: u32,
+    pub emission: Vec3,
+    pub flags: u32,
+    pub transmittance: Vec3,
+    /// GGX alpha (rough conductor) or int_ior / ext_ior (dielectric).
+    pub param: f32,
+}
+
+/// What every kernel of a frame reads: camera, image, budget and the frame's seed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Frame {
+    pub cam_origin: Vec3,
+    pub width: u32,
+    pub cam_forward: Vec3,
+    pub height: u32,
+    pub cam_right: Vec3,
+    /// Number of ray slots (= pixels).
+    pub slots: u32,
+    pub cam_up: Vec3,
+    pub seed: u32,
+    pub environment: Vec3,
+    /// Paths per pixel after which a slot stops regenerating (0 = never stop).
+    pub paths_per_pixel: u32,
+    /// Paths longer than this many bounces end (0 = no limit; Russian roulette ends them).
+    pub max_depth: u32,
+    /// Russian roulette starts at this bounce.
+    pub rr_depth: u32,
+    /// Continuation probability of Russian roulette (the paper: 0.8).
+    pub rr_continue: f32,
+    /// Whether the scene has any triangle (traversal of an empty scene is a miss).
+    pub has_geometry: u32,
+}
+
+/// `state.w` bits of a ray slot.
+pub const DONE: u32 = 1;
+/// Triangle index of a miss in `hit.w`.
+pub const MISS: u32 = 0xffff_ffff;

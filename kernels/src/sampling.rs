@@ -1,0 +1,85 @@
+//! Direction sampling. Diffuse bounces go through a [`DiffuseSampler`] strategy (the
+//! extension kernel is generic over it, so a new strategy is an `impl`, not a copied
+//! kernel); glossy, mirror and glass bounces sample their BSDF here.
+
+use cohort::prelude::*;
+
+/// Orthonormal frame around `n` (columns: tangent, bitangent, n), continuous in `n`
+/// everywhere except one point (Duff et al. 2017), so nearby normals map a local
+/// direction to nearby world directions.
+#[kernel_fn]
+pub fn frame(n: Vec3) -> Mat3 {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    Mat3::from_cols(t, bt, n)
+}
+
+/// Cosine-weighted direction in the local frame (z up).
+#[kernel_fn]
+pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
+    let r = u.x.sqrt();
+    let phi = 2.0 * core::f32::consts::PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt())
+}
+
+/// A strategy for diffuse bounces.
+#[kernel_trait]
+pub trait DiffuseSampler {
+    /// World direction for a bounce at shading normal `n` from random numbers `u`, in
+    /// `xyz`; in `w` the factor by which the path throughput is multiplied on top of the
+    /// albedo (f·cos/pdf divided by the albedo: 1 for exact cosine sampling).
+    fn sample(n: Vec3, u: Vec2) -> Vec4;
+}
+
+/// The paper's `normal` algorithm: independent cosine sampling per path.
+pub struct Cosine;
+
+#[kernel_impl]
+impl DiffuseSampler for Cosine {
+    fn sample(n: Vec3, u: Vec2) -> Vec4 {
+        let d = frame(n) * cosine_hemisphere(u);
+        Vec4::new(d.x, d.y, d.z, 1.0)
+    }
+}
+
+/// Smith masking G1 for GGX, with `cos` the cosine to the macro normal.
+#[kernel_fn]
+pub fn smith_g1(cos: f32, alpha: f32) -> f32 {
+    let c2 = (cos * cos).max(1e-12);
+    let tan2 = (1.0 - c2).max(0.0) / c2;
+    2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+}
+
+/// GGX visible-normal sampling (Heitz 2018): a microfacet normal for the local
+/// outgoing direction `wo` (z up).
+#[kernel_fn]
+pub fn ggx_vndf(wo: Vec3, alpha: f32, u: Vec2) -> Vec3 {
+    let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    let t1v = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
+    let t2v = vh.cross(t1v);
+    let r = u.x.sqrt();
+    let phi = 2.0 * core::f32::consts::PI * u.y;
+    let t1 = r * phi.cos();
+    let s = 0.5 * (1.0 + vh.z);
+    let t2 = (1.0 - s) * (1.0 - t1 * t1).max(0.0).sqrt() + s * r * phi.sin();
+    let nh = t1v * t1 + t2v * t2 + vh * (1.0 - t1 * t1 - t2 * t2).max(0.0).sqrt();
+    Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize()
+}
+
+/// Fresnel reflectance of a dielectric interface; `eta` = transmitted / incident index.
+#[kernel_fn]
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
+    if sin2_t >= 1.0 {
+        1.0
+    } else {
+        let cos_t = (1.0 - sin2_t).sqrt();
+        let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+        let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+        0.5 * (rs * rs + rp * rp)
+    }
+}

@@ -1,0 +1,13 @@
+//! Host side of the path tracer. Data flow: `cohort-scenes` Scene → [`gpu_scene`]
+//! (BVH + triangles + materials on the device) → [`Renderer`] (path-state buffers and
+//! the iteration loop over the kernels of `cohort-kernels`) → [`Image`] → [`output`]
+//! (EXR / PNG files, written atomically).
+
+pub mod gpu_scene;
+pub mod image;
+pub mod output;
+pub mod renderer;
+
+pub use gpu_scene::GpuScene;
+pub use image::Image;
+pub use renderer::{Algorithm, Budget, KernelTimes, RenderError, RenderOptions, RenderStats, Renderer};

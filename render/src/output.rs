@@ -1,0 +1,82 @@
+//! Writing images: linear EXR (exr crate) and tone-mapped sRGB PNG (png crate). Both
+//! are written to a temporary file beside the target and renamed over it, so a failed
+//! run never leaves a half-written file in place of a good one.
+
+use crate::Image;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {message}")]
+pub struct OutputError {
+    pub path: PathBuf,
+    pub message: String,
+}
+
+fn temp_beside(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes `path` through a temporary file: `write` fills the temporary file, which is
+/// renamed over `path` only if it succeeded.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), OutputError> {
+    let err = |message: String| OutputError { path: path.to_path_buf(), message };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(err(format!("directory {} does not exist", dir.display())));
+        }
+    }
+    let tmp = temp_beside(path);
+    match write(&tmp) {
+        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            err(e.to_string())
+        }),
+        Err(m) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(err(m))
+        }
+    }
+}
+
+pub fn write_exr(path: &Path, img: &Image) -> Result<(), OutputError> {
+    write_atomically(path, |tmp| {
+        let w = img.width as usize;
+        exr::prelude::write_rgb_file(tmp, w, img.height as usize, |x, y| {
+            let p = img.pixels[y * w + x];
+            (p.x, p.y, p.z)
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+fn srgb(linear: f32) -> u8 {
+    let c = linear.clamp(0.0, 1.0);
+    let s = if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// Tone-maps with exposure `2^stops` and clamping, then encodes sRGB.
+pub fn write_png(path: &Path, img: &Image, stops: f32) -> Result<(), OutputError> {
+    let scale = 2f32.powf(stops);
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), img.width, img.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+        let data: Vec<u8> = img.pixels.iter().flat_map(|p| [srgb(p.x * scale), srgb(p.y * scale), srgb(p.z * scale)]).collect();
+        writer.write_image_data(&data).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+/// Writes a text file (e.g. statistics JSON) atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
+    write_atomically(path, |tmp| {
+        let mut f = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        f.write_all(text.as_bytes()).map_err(|e| e.to_string())?;
+        f.sync_all().map_err(|e| e.to_string())
+    })
+}

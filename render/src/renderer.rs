@@ -1,0 +1,288 @@
+//! The iteration loop of the wavefront path tracer (PAPER.md §3): per iteration one
+//! batch `traverse` → `extend::<S>` → `compact_*`, until the budget (completed paths
+//! per pixel, or accumulated GPU time of those kernels, as in the paper) is spent.
+
+use std::time::{Duration, Instant};
+
+use cohort::runtime::{Device, DispatchStats, GpuBuffer, RuntimeError};
+use cohort::Grid;
+use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter, BLOCK};
+use cohort_kernels::extend::{extend, init_paths};
+use cohort_kernels::layout::Frame;
+use cohort_kernels::sampling::{Cosine, DiffuseSampler};
+use cohort_kernels::traverse::traverse;
+use cohort_scenes::{morton_pixel_order, GpuBvh, Scene};
+use glam::{UVec4, Vec3, Vec4};
+
+use crate::{GpuScene, Image};
+
+/// Sampling strategy of diffuse bounces (the paper's configurations extend this).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Algorithm {
+    /// Independent cosine sampling per path: the paper's reference `normal`.
+    Normal,
+}
+
+impl Algorithm {
+    pub fn parse(s: &str) -> Option<Algorithm> {
+        match s {
+            "normal" => Some(Algorithm::Normal),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Normal => "normal",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum Budget {
+    /// Every pixel completes exactly this many paths.
+    PathsPerPixel(u32),
+    /// Accumulated GPU time of traverse + extend + compact, as the paper measures.
+    KernelTime(Duration),
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub algorithm: Algorithm,
+    pub budget: Budget,
+    pub seed: u32,
+    /// Film size; `None` keeps the scene's.
+    pub size: Option<(u32, u32)>,
+    /// Run the compaction kernels (the paper's `(NO)` variants turn it off).
+    pub compact: bool,
+    /// Russian roulette continuation probability (the paper: 0.8).
+    pub rr_continue: f32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { algorithm: Algorithm::Normal, budget: Budget::PathsPerPixel(16), seed: 1, size: None, compact: true, rr_continue: 0.8 }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Runtime(#[from] RuntimeError),
+    #[error(transparent)]
+    Kernel(#[from] cohort::Error),
+    #[error("cannot build the BVH: {0}")]
+    Bvh(String),
+    #[error("{0}")]
+    Options(String),
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KernelTimes {
+    pub traverse: Duration,
+    pub extend: Duration,
+    pub compact: Duration,
+}
+impl KernelTimes {
+    pub fn total(&self) -> Duration {
+        self.traverse + self.extend + self.compact
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub iterations: u32,
+    pub completed_paths: u64,
+    /// Rays traversed (live rays summed over iterations).
+    pub rays: u64,
+    pub kernel: KernelTimes,
+    pub wall: Duration,
+    pub pixels: u64,
+}
+impl RenderStats {
+    pub fn paths_per_pixel(&self) -> f64 {
+        self.completed_paths as f64 / self.pixels.max(1) as f64
+    }
+    /// Completed paths per second of kernel time.
+    pub fn paths_per_second(&self) -> f64 {
+        self.completed_paths as f64 / self.kernel.total().as_secs_f64().max(1e-12)
+    }
+    /// Rays per second of traversal kernel time.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.kernel.traverse.as_secs_f64().max(1e-12)
+    }
+}
+
+/// Path state, structure of arrays, one entry per ray slot.
+struct Paths {
+    slot_pixel: GpuBuffer<u32>,
+    idrays: [GpuBuffer<u32>; 2],
+    state: GpuBuffer<UVec4>,
+    ray_o: GpuBuffer<Vec4>,
+    ray_d: GpuBuffer<Vec4>,
+    beta: GpuBuffer<Vec4>,
+    radiance: GpuBuffer<Vec4>,
+    hits: GpuBuffer<Vec4>,
+    accum: GpuBuffer<Vec4>,
+    flags: GpuBuffer<u32>,
+    count: GpuBuffer<u32>,
+    block_sums: GpuBuffer<u32>,
+    total: GpuBuffer<u32>,
+    /// [completed paths, slots done]
+    counters: GpuBuffer<u32>,
+}
+
+pub struct Renderer<'d> {
+    device: &'d Device,
+    scene: GpuScene,
+    frame: Frame,
+    paths: Paths,
+    slot_to_pixel: Vec<u32>,
+    opts: RenderOptions,
+}
+
+fn ns(s: &DispatchStats) -> Duration {
+    Duration::from_nanos(s.gpu_time_ns.unwrap_or(0))
+}
+
+impl<'d> Renderer<'d> {
+    pub fn new(device: &'d Device, scene: &Scene, opts: RenderOptions) -> Result<Self, RenderError> {
+        let mut camera = scene.camera.clone();
+        if let Some((w, h)) = opts.size {
+            if w == 0 || h == 0 {
+                return Err(RenderError::Options(format!("image size {w}x{h} is empty")));
+            }
+            camera.width = w;
+            camera.height = h;
+        }
+        let (w, h) = (camera.width, camera.height);
+        let n = w as u64 * h as u64;
+        if n > (1 << 26) {
+            return Err(RenderError::Options(format!("image size {w}x{h} is larger than this renderer supports (2^26 pixels)")));
+        }
+        if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
+            return Err(RenderError::Options(format!("Russian roulette continuation {} is not in (0, 1]", opts.rr_continue)));
+        }
+        let bvh = GpuBvh::build(scene).map_err(|e| RenderError::Bvh(e.to_string()))?;
+        let gpu = GpuScene::upload(device, scene, &bvh)?;
+        let f = camera.frame();
+        let paths_per_pixel = match opts.budget {
+            Budget::PathsPerPixel(p) => p,
+            Budget::KernelTime(_) => 0,
+        };
+        let frame = Frame {
+            cam_origin: f.origin,
+            width: w,
+            cam_forward: f.forward,
+            height: h,
+            cam_right: f.right,
+            slots: n as u32,
+            cam_up: f.up,
+            seed: opts.seed,
+            environment: scene.environment,
+            paths_per_pixel,
+            max_depth: scene.integrator.max_depth.max(0) as u32,
+            rr_depth: 0,
+            rr_continue: opts.rr_continue,
+            has_geometry: (gpu.triangle_count > 0) as u32,
+        };
+        let n = n as usize;
+        let slot_to_pixel = morton_pixel_order(w, h);
+        let blocks = n.div_ceil(BLOCK as usize);
+        let paths = Paths {
+            slot_pixel: device.upload(&slot_to_pixel)?,
+            idrays: [device.alloc(n)?, device.alloc(n)?],
+            state: device.alloc(n)?,
+            ray_o: device.alloc(n)?,
+            ray_d: device.alloc(n)?,
+            beta: device.alloc(n)?,
+            radiance: device.alloc(n)?,
+            hits: device.alloc(n)?,
+            accum: device.alloc(n)?,
+            flags: device.alloc(n)?,
+            count: device.upload(&[n as u32])?,
+            block_sums: device.alloc(blocks)?,
+            total: device.alloc(1)?,
+            counters: device.alloc(2)?,
+        };
+        Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts })
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.frame.width, self.frame.height)
+    }
+
+    /// Renders until the budget is spent. `progress` receives the fraction done.
+    pub fn render(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+        match self.opts.algorithm {
+            Algorithm::Normal => self.render_with::<Cosine>(&mut progress),
+        }
+    }
+
+    fn render_with<S: DiffuseSampler>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+        let d = self.device;
+        let p = &self.paths;
+        let n = self.frame.slots;
+        let start = Instant::now();
+        let spec_init = init_paths::spec(d, None);
+        let spec_t = traverse::spec(d, None);
+        let spec_e = extend::spec(d, None);
+        let spec_cc = compact_count::spec(d, None);
+        let spec_co = compact_offsets::spec(d, None);
+        let spec_cs = compact_scatter::spec(d, None);
+        init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
+        let mut stats = RenderStats { pixels: n as u64, ..Default::default() };
+        let mut cur = 0usize;
+        let mut live = n as u64;
+        loop {
+            let mut b = d.batch();
+            traverse::record(&mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits)?;
+            extend::record::<S>(
+                &mut b, &spec_e, n, &self.frame, &p.count, &p.idrays[cur], &p.hits, &self.scene.triangles, &self.scene.materials,
+                &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum, &p.flags, &p.counters,
+            )?;
+            if self.opts.compact {
+                compact_count::record(&mut b, &spec_cc, n, &p.count, &p.flags, &p.block_sums)?;
+                compact_offsets::record(&mut b, &spec_co, Grid::Groups([1, 1, 1]), &p.count, &p.block_sums, &p.total)?;
+                compact_scatter::record(&mut b, &spec_cs, n, &p.count, &p.flags, &p.block_sums, &p.total, &p.idrays[cur], &p.idrays[1 - cur])?;
+            }
+            let times = b.submit()?;
+            if self.opts.compact {
+                cur = 1 - cur;
+            }
+            stats.iterations += 1;
+            stats.rays += live;
+            stats.kernel.traverse += ns(&times[0]);
+            stats.kernel.extend += ns(&times[1]);
+            stats.kernel.compact += times[2..].iter().map(ns).sum::<Duration>();
+            let counters = d.read(&p.counters)?;
+            stats.completed_paths = counters[0] as u64;
+            live = n as u64 - counters[1] as u64;
+            stats.wall = start.elapsed();
+            let fraction = match self.opts.budget {
+                Budget::PathsPerPixel(pp) => stats.completed_paths as f64 / (pp as f64 * n as f64),
+                Budget::KernelTime(t) => stats.kernel.total().as_secs_f64() / t.as_secs_f64(),
+            };
+            progress(fraction.min(1.0), &stats);
+            if fraction >= 1.0 || live == 0 {
+                break;
+            }
+        }
+        let image = self.image()?;
+        Ok((image, stats))
+    }
+
+    /// The current estimate: per pixel, the mean of its completed paths.
+    pub fn image(&self) -> Result<Image, RenderError> {
+        let accum = self.device.read(&self.paths.accum)?;
+        let (w, h) = self.size();
+        let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
+        let mut paths = vec![0u32; (w * h) as usize];
+        for (slot, a) in accum.iter().enumerate() {
+            let px = self.slot_to_pixel[slot] as usize;
+            let count = a.w as u32;
+            paths[px] = count;
+            pixels[px] = if count > 0 { a.truncate() / a.w } else { Vec3::ZERO };
+        }
+        Ok(Image { width: w, height: h, pixels, paths })
+    }
+}
