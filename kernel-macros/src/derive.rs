@@ -8,12 +8,12 @@ use quote::{quote, quote_spanned};
 use syn::spanned::Spanned;
 use syn::DeriveInput;
 
-use crate::rewrite::err;
+use crate::rewrite::{err, err_at};
 
 pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
     let name = &input.ident;
     if !input.generics.params.is_empty() {
-        return err(input.generics.span(), "`#[derive(GpuType)]` does not support generic structs");
+        return err_at(&input.generics, "`#[derive(GpuType)]` does not support generic structs");
     }
     let repr_c = input.attrs.iter().any(|a| {
         a.path().is_ident("repr") && a.parse_args_with(syn::punctuated::Punctuated::<syn::Ident, syn::Token![,]>::parse_terminated)
@@ -26,8 +26,10 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
     let syn::Data::Struct(s) = &input.data else {
         return err(name.span(), "`#[derive(GpuType)]` supports structs only");
     };
-    let syn::Fields::Named(fields) = &s.fields else {
-        return err(s.fields.span(), "`#[derive(GpuType)]` needs named fields");
+    let fields = match &s.fields {
+        syn::Fields::Named(f) => f,
+        syn::Fields::Unnamed(f) => return err_at(f, "`#[derive(GpuType)]` needs named fields"),
+        syn::Fields::Unit => return err(name.span(), "`#[derive(GpuType)]` needs named fields"),
     };
     let name_lit = name.to_string();
     let mut members = Vec::new();
@@ -54,8 +56,17 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
             "GpuType `{name_lit}`: field `{flit}` is not at a multiple of its GPU alignment (WGSL: vec3/vec4/mat need 16 bytes, vec2 8); reorder the fields or add padding"
         );
         let size_msg = format!("GpuType `{name_lit}`: field `{flit}` has a different size on the host and the GPU (e.g. glam::Mat3); use a type with the same layout");
-        checks.push(quote_spanned! {f.span()=>
+        // The const-evaluation error points at the `assert!`: give it the field's name
+        // (offset) or type (size) as its span, not the field's first token (`pub`).
+        let name_span = fname.span();
+        let ty_span = match ty {
+            syn::Type::Path(p) => p.path.segments.last().map_or_else(|| ty.span(), |s| s.ident.span()),
+            _ => ty.span(),
+        };
+        checks.push(quote_spanned! {name_span=>
             ::core::assert!(!SHAREABLE_FIELDS || ::core::mem::offset_of!(#name, #fname) % <#ty as ::cohort::ir::GpuType>::GPU_ALIGN == 0, #msg);
+        });
+        checks.push(quote_spanned! {ty_span=>
             ::core::assert!(!<#ty as ::cohort::ir::GpuType>::HOST_SHAREABLE || ::core::mem::size_of::<#ty>() == <#ty as ::cohort::ir::GpuType>::GPU_SIZE, #size_msg);
         });
         index_arms.push(quote! { if offset == ::core::mem::offset_of!(#name, #fname) { return ::core::option::Option::Some(#i); } });

@@ -47,9 +47,19 @@ pub struct Rewriter {
     pub allow_group_share: bool,
 }
 
+/// An error at one span (a single token, or a span that is all there is).
 pub fn err<T>(span: Span, msg: impl std::fmt::Display) -> Result<T> {
     Err(syn::Error::new(span, msg.to_string()))
 }
+
+/// An error about a whole syntax node: underlines it from its first to its last token.
+pub fn err_at<T>(node: impl ToTokens, msg: impl std::fmt::Display) -> Result<T> {
+    Err(syn::Error::new_spanned(node, msg.to_string()))
+}
+
+/// What to write instead of a loop label.
+const LABEL_HINT: &str = "use a `let mut` flag that the outer loop tests";
+const NO_LABELS: &str = "loop labels are not supported in kernels; use a `let mut` flag that the outer loop tests";
 
 fn is_diverging(e: &Expr) -> bool {
     matches!(e, Expr::Break(_) | Expr::Continue(_) | Expr::Return(_))
@@ -144,10 +154,10 @@ impl Rewriter {
         match s {
             Stmt::Local(l) => self.local(l),
             Stmt::Item(syn::Item::Const(c)) => Ok(c.to_token_stream()),
-            Stmt::Item(i) => err(i.span(), "only `const` items may be declared inside kernels; move other items out of the function"),
+            Stmt::Item(i) => err_at(i, "only `const` items may be declared inside kernels; move other items out of the function"),
             Stmt::Expr(e, _) => self.stmt_expr(e),
-            Stmt::Macro(m) => err(
-                m.span(),
+            Stmt::Macro(m) => err_at(
+                m,
                 format!(
                     "macro `{}!` is not supported in kernels (kernels have no I/O or panics); remove it or move it to host code",
                     m.mac.path.to_token_stream()
@@ -157,22 +167,25 @@ impl Rewriter {
     }
 
     fn local(&mut self, l: &syn::Local) -> Result<TokenStream> {
+        if let Some(init) = &l.init {
+            if let Some((else_token, _)) = &init.diverge {
+                return err_at(
+                    else_token,
+                    "`let … else` is not supported in kernels; use a boolean check with if/else, e.g. `if i < buf.len() { let v = buf[i]; … }`",
+                );
+            }
+        }
         let (ident, mutable, ty) = match &l.pat {
             Pat::Ident(p) => (p.ident.clone(), p.mutability.is_some(), None),
             Pat::Type(t) => match &*t.pat {
                 Pat::Ident(p) => (p.ident.clone(), p.mutability.is_some(), Some((*t.ty).clone())),
-                other => return err(other.span(), "destructuring is not supported in kernels; bind one name per `let`"),
+                other => return err_at(other, "destructuring is not supported in kernels; bind one name per `let`"),
             },
-            other => return err(other.span(), "destructuring is not supported in kernels; bind one name per `let`"),
+            other => return err_at(other, "destructuring is not supported in kernels; bind one name per `let`"),
         };
         if let Pat::Ident(p) = &l.pat {
             if p.by_ref.is_some() {
-                return err(p.span(), "`ref` bindings are not supported in kernels");
-            }
-        }
-        if let Some(init) = &l.init {
-            if let Some((_, d)) = &init.diverge {
-                return err(d.span(), "`let ... else` is not supported in kernels; use if/else");
+                return err_at(p, "`ref` bindings are not supported in kernels");
             }
         }
         let name = ident.to_string();
@@ -193,7 +206,7 @@ impl Rewriter {
             }
             (_, None) => match ty_tokens {
                 Some(t) => quote_spanned! {span=> let #ident = ::cohort::ir::Var::<#t>::uninit(#name); },
-                None => return err(span, "a `let` without initial value needs a type annotation in kernels"),
+                None => return err_at(l, "a `let` without initial value needs a type annotation in kernels"),
             },
         };
         let bind = if mutable || l.init.is_none() { Bind::Var } else { Bind::Val };
@@ -212,10 +225,10 @@ impl Rewriter {
             }
             Expr::While(w) => {
                 if let Some(l) = &w.label {
-                    return err(l.span(), "loop labels are not supported in kernels");
+                    return err_at(l, NO_LABELS);
                 }
                 if let Expr::Let(l) = &*w.cond {
-                    return err(l.span(), "`while let` is not supported in kernels; use `while` with a condition");
+                    return err_at(l, "`while let` is not supported in kernels; use `while` with a condition");
                 }
                 let c = self.rv(&w.cond)?;
                 self.loop_depth += 1;
@@ -226,7 +239,7 @@ impl Rewriter {
             }
             Expr::Loop(l) => {
                 if let Some(lb) = &l.label {
-                    return err(lb.span(), "loop labels are not supported in kernels");
+                    return err_at(lb, NO_LABELS);
                 }
                 self.loop_depth += 1;
                 let body = self.block(&l.body);
@@ -237,26 +250,26 @@ impl Rewriter {
             Expr::ForLoop(f) => self.for_loop(f),
             Expr::Break(b) => {
                 if b.label.is_some() {
-                    return err(b.span(), "labelled `break` is not supported in kernels");
+                    return err_at(b, format!("labelled `break` is not supported in kernels; {}", LABEL_HINT));
                 }
                 if let Some(v) = &b.expr {
-                    return err(v.span(), "`break` with a value is not supported in kernels; assign to a `let mut` before `break`");
+                    return err_at(v, "`break` with a value is not supported in kernels; assign to a `let mut` before `break`");
                 }
                 if self.loop_depth == 0 {
-                    return err(b.span(), "`break` outside of a loop");
+                    return err_at(b, "`break` outside of a loop");
                 }
                 Ok(quote_spanned! {span=> ::cohort::ir::break_(); })
             }
             Expr::Continue(c) => {
                 if c.label.is_some() {
-                    return err(c.span(), "labelled `continue` is not supported in kernels");
+                    return err_at(c, format!("labelled `continue` is not supported in kernels; {}", LABEL_HINT));
                 }
                 Ok(quote_spanned! {span=> ::cohort::ir::continue_(); })
             }
             Expr::Return(r) => {
                 if self.forbid_return {
-                    return err(
-                        r.span(),
+                    return err_at(
+                        r,
                         "early `return` is not supported in helpers that take buffers (they are inlined); end the function with its value instead",
                     );
                 }
@@ -291,27 +304,27 @@ impl Rewriter {
     fn for_loop(&mut self, f: &syn::ExprForLoop) -> Result<TokenStream> {
         let span = f.span();
         if let Some(l) = &f.label {
-            return err(l.span(), "loop labels are not supported in kernels");
+            return err_at(l, NO_LABELS);
         }
         let var = match &*f.pat {
             Pat::Ident(p) if p.mutability.is_none() => p.ident.clone(),
             Pat::Wild(_) => format_ident!("_"),
-            other => return err(other.span(), "`for` binds one immutable name in kernels, e.g. `for i in 0..n`"),
+            other => return err_at(other, "`for` binds one immutable name in kernels, e.g. `for i in 0..n`"),
         };
         let (range, rev) = match &*f.expr {
             Expr::Range(r) => (r.clone(), false),
             Expr::MethodCall(m) if m.method == "rev" && m.args.is_empty() => match strip_paren(&m.receiver) {
                 Expr::Range(r) => (r.clone(), true),
-                other => return err(other.span(), "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
+                other => return err_at(other, "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
             },
-            other => return err(other.span(), "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
+            other => return err_at(other, "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
         };
         let (Some(start), Some(end)) = (&range.start, &range.end) else {
-            return err(range.span(), "ranges in kernel `for` loops need both ends: `a..b`");
+            return err_at(&range, "ranges in kernel `for` loops need both ends: `a..b`");
         };
         let inclusive = matches!(range.limits, syn::RangeLimits::Closed(_));
         if rev && inclusive {
-            return err(range.span(), "`(a..=b).rev()` is not supported in kernels; write `(a..b + 1).rev()`");
+            return err_at(&range, "`(a..=b).rev()` is not supported in kernels; write `(a..b + 1).rev()`");
         }
         let s = self.rv(start)?;
         let e = self.rv(end)?;
@@ -348,8 +361,8 @@ impl Rewriter {
             Expr::Unary(u) if matches!(u.op, UnOp::Deref(_)) => self.place(&u.expr),
             _ => match self.local_ident(e) {
                 Some((id, Bind::Var | Bind::Root)) => Ok(quote_spanned! {span=> ::cohort::ir::place(&#id) }),
-                Some((id, Bind::Val)) => err(span, format!("cannot assign to `{id}`: it is not declared `let mut`")),
-                None => err(span, "this expression is not a place that kernels can assign to (a `let mut` variable, a buffer element, a field of one, or `*r` of a `&mut` parameter)"),
+                Some((id, Bind::Val)) => err_at(e, format!("cannot assign to `{id}`: it is not declared `let mut`")),
+                None => err_at(e, "this expression is not a place that kernels can assign to (a `let mut` variable, a buffer element, a field of one, or `*r` of a `&mut` parameter)"),
             },
         }
     }
@@ -364,7 +377,7 @@ impl Rewriter {
                     let lit = &l.lit;
                     Ok(quote_spanned! {span=> ::cohort::ir::lit(#lit) })
                 }
-                other => err(other.span(), "only integer, float and bool literals are supported in kernels"),
+                other => err_at(other, "only integer, float and bool literals are supported in kernels"),
             },
             Expr::Paren(p) => {
                 let inner = self.rv(&p.expr)?;
@@ -405,7 +418,7 @@ impl Rewriter {
                     let v = self.rv(&u.expr)?;
                     Ok(quote_spanned! {span=> (!#v) })
                 }
-                _ => err(u.span(), "unsupported unary operator in kernels"),
+                _ => err_at(u, "unsupported unary operator in kernels"),
             },
             Expr::Binary(b) => self.binary(b),
             Expr::Cast(c) => {
@@ -423,11 +436,11 @@ impl Rewriter {
             Expr::If(i) => self.if_expr(i),
             Expr::Block(b) => {
                 if let Some(l) = &b.label {
-                    return err(l.span(), "labelled blocks are not supported in kernels");
+                    return err_at(l, "labelled blocks are not supported in kernels; use if/else or a `let mut` flag");
                 }
                 self.block(&b.block)
             }
-            Expr::Unsafe(u) => err(u.span(), "`unsafe` blocks are not supported in kernels"),
+            Expr::Unsafe(u) => err_at(u.unsafe_token, "`unsafe` blocks are not supported in kernels"),
             Expr::MethodCall(m) => self.method_call(m),
             Expr::Call(c) => self.call(c),
             Expr::Struct(s) => self.struct_lit(s),
@@ -441,26 +454,26 @@ impl Rewriter {
                 Ok(quote_spanned! {span=> ::cohort::ir::array_repeat::<_, { #n }>(#v) })
             }
             Expr::Match(m) => err(m.match_token.span, "`match` is not supported in kernels; use an if/else chain"),
-            Expr::Tuple(t) => err(t.span(), "tuples are not supported in kernels; use a struct with #[derive(GpuType)]"),
-            Expr::Closure(c) => err(c.span(), "closures are only supported as the argument of `group_share`"),
-            Expr::Range(r) => err(r.span(), "ranges are only supported as the iterator of a `for` loop"),
-            Expr::Try(t) => err(t.question_token.span, "the `?` operator is not supported in kernels"),
-            Expr::Macro(m) => err(
-                m.span(),
+            Expr::Tuple(t) => err_at(t, "tuples are not supported in kernels; use a struct with #[derive(GpuType)]"),
+            Expr::Closure(c) => err_at(c, "closures are only supported as the argument of `group_share`; use a #[kernel_fn] helper"),
+            Expr::Range(r) => err_at(r, "ranges are only supported as the iterator of a `for` loop"),
+            Expr::Try(t) => err_at(t.question_token, "the `?` operator is not supported in kernels; check with if/else instead"),
+            Expr::Macro(m) => err_at(
+                m,
                 format!(
                     "macro `{}!` is not supported in kernels (kernels have no I/O or panics)",
                     m.mac.path.to_token_stream()
                 ),
             ),
-            Expr::Let(l) => err(l.span(), "`if let` / `let` patterns are not supported in kernels; use a boolean condition"),
-            Expr::Async(a) => err(a.span(), "`async` is not supported in kernels"),
-            Expr::Await(a) => err(a.span(), "`.await` is not supported in kernels"),
+            Expr::Let(l) => err_at(l, "`if let` / `let` patterns are not supported in kernels; use a boolean condition"),
+            Expr::Async(a) => err_at(a.async_token, "`async` is not supported in kernels"),
+            Expr::Await(a) => err_at(a, "`.await` is not supported in kernels"),
             Expr::While(_) | Expr::Loop(_) | Expr::ForLoop(_) | Expr::Break(_) | Expr::Continue(_)
             | Expr::Return(_) | Expr::Assign(_) => {
                 let s = self.stmt_expr(e)?;
                 Ok(quote_spanned! {span=> { #s } })
             }
-            other => err(other.span(), "this expression is not supported in kernels"),
+            other => err_at(other, "this expression is not supported in kernels"),
         }
     }
 
@@ -504,7 +517,7 @@ impl Rewriter {
     fn if_expr(&mut self, i: &syn::ExprIf) -> Result<TokenStream> {
         let span = i.span();
         if let Expr::Let(l) = &*i.cond {
-            return err(l.span(), "`if let` is not supported in kernels; use a boolean condition");
+            return err_at(l, "`if let` is not supported in kernels; use a boolean condition");
         }
         let c = self.rv(&i.cond)?;
         let then = self.block(&i.then_branch)?;
@@ -518,7 +531,7 @@ impl Rewriter {
     fn method_call(&mut self, m: &syn::ExprMethodCall) -> Result<TokenStream> {
         let span = m.span();
         if let Some(t) = &m.turbofish {
-            return err(t.span(), "turbofish on methods is not supported in kernels");
+            return err_at(t, "turbofish on methods is not supported in kernels");
         }
         let method = &m.method;
         let args = m.args.iter().map(|a| self.rv(a)).collect::<Result<Vec<_>>>()?;
@@ -543,15 +556,15 @@ impl Rewriter {
     fn call(&mut self, c: &syn::ExprCall) -> Result<TokenStream> {
         let span = c.span();
         let Expr::Path(fp) = &*c.func else {
-            return err(c.func.span(), "only calls of named functions are supported in kernels");
+            return err_at(&c.func, "only calls of named functions are supported in kernels");
         };
         if self.local_ident(&c.func).is_some() {
-            return err(c.func.span(), "calling a local value is not supported in kernels");
+            return err_at(&c.func, "calling a local value is not supported in kernels");
         }
         let is_group_share = fp.qself.is_none() && fp.path.segments.last().is_some_and(|s| s.ident == "group_share");
         if is_group_share && !self.allow_group_share {
-            return err(
-                c.func.span(),
+            return err_at(
+                &c.func,
                 "`group_share` can only be called directly in a `#[kernel]` body (its group level is the kernel's)",
             );
         }
@@ -569,16 +582,17 @@ impl Rewriter {
     fn closure(&mut self, cl: &syn::ExprClosure) -> Result<TokenStream> {
         let span = cl.span();
         if cl.inputs.len() != 1 {
-            return err(cl.inputs.span(), "the closure of `group_share` takes one argument: the group index, e.g. `|group| ...`");
+            let (open, inputs, close) = (&cl.or1_token, &cl.inputs, &cl.or2_token);
+            return err_at(quote!(#open #inputs #close), "the closure of `group_share` takes one argument: the group index, e.g. `|group| ...`");
         }
         let name = match &cl.inputs[0] {
             Pat::Ident(p) => p.ident.clone(),
             Pat::Type(t) => match &*t.pat {
                 Pat::Ident(p) => p.ident.clone(),
-                other => return err(other.span(), "bind the group index to a name"),
+                other => return err_at(other, "bind the group index to a name"),
             },
             Pat::Wild(_) => format_ident!("_"),
-            other => return err(other.span(), "bind the group index to a name"),
+            other => return err_at(other, "bind the group index to a name"),
         };
         self.push();
         self.bind(&name.to_string(), Bind::Val);
@@ -611,7 +625,7 @@ impl Rewriter {
                 let ty = &ty_seg.ident;
                 let f = &last.ident;
                 if last.arguments != syn::PathArguments::None {
-                    return err(last.span(), "generic arguments are not supported here");
+                    return err_at(last, "generic arguments are not supported here");
                 }
                 return Ok(quote_spanned! {span=> <::cohort::ir::Val<#ty>>::#f });
             }
@@ -633,10 +647,11 @@ impl Rewriter {
     fn struct_lit(&mut self, s: &syn::ExprStruct) -> Result<TokenStream> {
         let span = s.span();
         if let Some(r) = &s.rest {
-            return err(r.span(), "struct update syntax (`..base`) is not supported in kernels; list every field");
+            let dots = &s.dot2_token;
+            return err_at(quote!(#dots #r), "struct update syntax (`..base`) is not supported in kernels; list every field");
         }
         if s.qself.is_some() {
-            return err(s.span(), "qualified struct paths are not supported in kernels");
+            return err_at(s, "qualified struct paths are not supported in kernels");
         }
         let path = &s.path;
         let mut inits = Vec::new();

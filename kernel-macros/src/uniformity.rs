@@ -5,19 +5,25 @@
 //!
 //! The analysis is conservative and syntactic. Uniform values: literals, constants,
 //! uniform-buffer reads, `workgroup_id`/`num_workgroups`/`workgroup_index`/
-//! `subgroup_size`/`num_subgroups` builtins, and expressions built only from those.
-//! Everything else (thread ids, storage and workgroup memory, atomics, subgroup
-//! operations, `group_share` results) is non-uniform. A `let mut` is uniform when every
-//! assignment to it is. Code after a `return`, `break` or `continue` taken under
-//! non-uniform control is non-uniform too.
+//! `subgroup_size`/`num_subgroups` builtins, and expressions built only from those
+//! (ranges included). Everything else (thread ids, storage and workgroup memory, atomics,
+//! subgroup operations, `group_share` results, calls that are given a buffer) is
+//! non-uniform. A `let mut` is uniform when every assignment to it is. Code after a
+//! `return`, `break` or `continue` taken under non-uniform control is non-uniform too, and
+//! so is the right side of `&&`/`||` when the left side is. Inside a `group_share`
+//! closure only the group's leader runs, so no synchronising call may appear there.
 
-use proc_macro2::Span;
+use proc_macro2::TokenStream;
+use quote::ToTokens;
 use std::collections::{HashMap, HashSet};
-use syn::spanned::Spanned;
 use syn::{Block, Expr, Pat, Stmt};
 
 const UNIFORM_BUILTINS: &[&str] = &["workgroup_id", "num_workgroups", "workgroup_index", "workgroup_size", "subgroup_size", "num_subgroups"];
-const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "group_share"];
+const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share"];
+
+const STARTS_HERE: &str = "the non-uniform control flow starts here";
+const AND_NOTE: &str = "the non-uniform control flow starts here: the right side of `&&` runs only for the invocations where this is true";
+const OR_NOTE: &str = "the non-uniform control flow starts here: the right side of `||` runs only for the invocations where this is false";
 
 #[derive(Default)]
 pub struct Params {
@@ -27,10 +33,21 @@ pub struct Params {
     pub uniform_buffers: HashSet<String>,
     /// Names of parameters whose values differ between invocations (thread ids).
     pub nonuniform: HashSet<String>,
+    /// Names of storage-buffer and workgroup-memory parameters: a call given one may read
+    /// memory or use atomics, so its result is non-uniform.
+    pub memory: HashSet<String>,
 }
 
 pub fn uniform_builtin(name: &str) -> bool {
     UNIFORM_BUILTINS.contains(&name)
+}
+
+/// The innermost condition that governs the current code, when it is non-uniform.
+#[derive(Clone)]
+struct Cond {
+    tokens: TokenStream,
+    /// Whether the code runs where the condition holds (`then`) or where it does not.
+    holds: bool,
 }
 
 struct Walker<'a> {
@@ -39,13 +56,18 @@ struct Walker<'a> {
     /// `let mut` names found non-uniform in an earlier pass.
     nonuniform_vars: HashSet<String>,
     changed: bool,
-    /// Why control is non-uniform here, if it is.
-    divergent: Option<Span>,
-    /// A non-uniform exit (`return`) happened earlier in the function.
-    exited: Option<Span>,
+    /// Why control is non-uniform here, if it is: the notes to attach to an error.
+    divergent: Option<syn::Error>,
+    /// The innermost enclosing condition, if it is non-uniform.
+    cond: Option<Cond>,
+    /// A non-uniform exit (`return`) happened earlier in the function: its notes.
+    exited: Option<syn::Error>,
     error: Option<syn::Error>,
     check: bool,
-    found_exit: bool,
+    /// The first `break`/`continue`/`return` taken under non-uniform control: its notes.
+    first_exit: Option<syn::Error>,
+    /// Inside the closure of a `group_share` (run by the group's leader only).
+    in_share: bool,
 }
 
 fn call_name(e: &Expr) -> Option<String> {
@@ -57,26 +79,46 @@ fn call_name(e: &Expr) -> Option<String> {
     None
 }
 
+/// What an error about a call underlines: the whole call when it has no arguments
+/// (`workgroup_barrier()`), else the called path (a closure argument can be long).
+fn call_site(c: &syn::ExprCall) -> TokenStream {
+    if c.args.is_empty() {
+        c.to_token_stream()
+    } else {
+        c.func.to_token_stream()
+    }
+}
+
 impl Walker<'_> {
     fn lookup(&self, n: &str) -> Option<bool> {
         self.scopes.iter().rev().find_map(|s| s.get(n).copied())
     }
 
-    fn fail(&mut self, span: Span, what: &str, why: Span) {
+    fn fail(&mut self, at: TokenStream, what: &str, why: syn::Error) {
         if self.check && self.error.is_none() {
-            let mut e = syn::Error::new(
-                span,
+            let scope = if what.starts_with("subgroup_") { "subgroup" } else { "workgroup" };
+            let mut e = syn::Error::new_spanned(
+                at,
                 format!(
-                    "`{what}` must be reached by every invocation of the workgroup, but it is under control flow that depends on a non-uniform value"
+                    "`{what}` must be reached by every invocation of the {scope}, but it is under control flow that depends on a non-uniform value"
                 ),
             );
-            e.combine(syn::Error::new(why, "the non-uniform control flow starts here"));
+            e.combine(why);
             self.error = Some(e);
         }
     }
 
-    fn control(&self) -> Option<Span> {
-        self.divergent.or(self.exited)
+    fn fail_in_share(&mut self, at: TokenStream, what: &str) {
+        if self.check && self.error.is_none() {
+            self.error = Some(syn::Error::new_spanned(
+                at,
+                format!("`{what}` cannot be called inside a `group_share` closure (only the group's leader runs it)"),
+            ));
+        }
+    }
+
+    fn control(&self) -> Option<syn::Error> {
+        self.divergent.clone().or_else(|| self.exited.clone())
     }
 
     fn block(&mut self, b: &Block) {
@@ -103,38 +145,89 @@ impl Walker<'_> {
         }
     }
 
-    fn with_divergence<R>(&mut self, cond_uniform: bool, span: Span, f: impl FnOnce(&mut Self) -> R) -> R {
-        let saved = self.divergent;
-        if !cond_uniform && self.divergent.is_none() {
-            self.divergent = Some(span);
+    /// Runs `f` for code governed by `cond` (where it holds, or where it does not), which
+    /// is non-uniform unless `cond_uniform`; `note` says so at the condition.
+    fn guarded<R>(&mut self, cond: &impl ToTokens, holds: bool, cond_uniform: bool, note: &str, f: impl FnOnce(&mut Self) -> R) -> R {
+        let c = (!cond_uniform).then(|| Cond { tokens: cond.to_token_stream(), holds });
+        let why = c.as_ref().map(|c| syn::Error::new_spanned(&c.tokens, note));
+        self.diverging(why, c, f)
+    }
+
+    /// Runs `f` with control non-uniform for the reason `why` (if any and not already),
+    /// and `cond` as the innermost condition.
+    fn diverging<R>(&mut self, why: Option<syn::Error>, cond: Option<Cond>, f: impl FnOnce(&mut Self) -> R) -> R {
+        let saved = self.divergent.clone();
+        let saved_cond = std::mem::replace(&mut self.cond, cond);
+        if self.divergent.is_none() {
+            self.divergent = why;
         }
         let r = f(self);
         self.divergent = saved;
+        self.cond = saved_cond;
         r
     }
 
-    fn loop_body(&mut self, cond_uniform: bool, span: Span, body: &Block) {
+    fn loop_body(&mut self, cond_uniform: bool, why: impl FnOnce() -> (syn::Error, Option<Cond>), body: &Block) {
         // A non-uniform `break`/`continue` inside makes later iterations non-uniform, so
-        // probe the body first and re-walk it as divergent if one exists.
-        let exits = cond_uniform && self.divergent.is_none() && self.has_divergent_exit(body);
-        let uniform = cond_uniform && !exits;
-        self.with_divergence(uniform, span, |w| w.block(body));
+        // probe the body first and re-walk it as divergent if one exists. Such an exit is
+        // also the reason to report when the condition is non-uniform too: typically the
+        // condition reads a variable that the exit made non-uniform.
+        let exit = if self.divergent.is_none() { self.divergent_exit(body) } else { None };
+        let (why, cond) = match exit {
+            Some(notes) => (Some(notes), None),
+            None if cond_uniform => (None, None),
+            None => {
+                let (w, c) = why();
+                (Some(w), c)
+            }
+        };
+        self.diverging(why, cond, |w| w.block(body));
     }
 
-    fn has_divergent_exit(&mut self, body: &Block) -> bool {
+    /// The notes of the first `break`/`continue`/`return` in `body` that only some
+    /// invocations take, if any.
+    fn divergent_exit(&mut self, body: &Block) -> Option<syn::Error> {
         let mut probe = Walker {
             params: self.params,
             scopes: self.scopes.clone(),
             nonuniform_vars: self.nonuniform_vars.clone(),
             changed: false,
             divergent: None,
+            cond: None,
             exited: None,
             error: None,
             check: false,
-            found_exit: false,
+            first_exit: None,
+            in_share: self.in_share,
         };
         probe.block(body);
-        probe.found_exit
+        probe.first_exit
+    }
+
+    /// Records a `break`/`continue`/`return` (`e`); when only some invocations take it,
+    /// returns the notes that explain the non-uniform control flow after it.
+    fn exit(&mut self, e: &Expr, kw: &str) -> Option<syn::Error> {
+        let d = self.divergent.as_ref()?;
+        let (scope, what) = match kw {
+            "break" => ("loop", "leave the loop"),
+            "continue" => ("loop", "skip the rest of the iteration"),
+            _ => ("kernel", "return early"),
+        };
+        let mut notes = syn::Error::new_spanned(
+            e,
+            format!("this `{kw}` is taken by only some invocations, so the rest of the {scope} is non-uniform"),
+        );
+        match &self.cond {
+            Some(c) => notes.combine(syn::Error::new_spanned(
+                &c.tokens,
+                format!("invocations for which this {} {what}", if c.holds { "holds" } else { "does not hold" }),
+            )),
+            None => notes.combine(d.clone()),
+        }
+        if self.first_exit.is_none() {
+            self.first_exit = Some(notes.clone());
+        }
+        Some(notes)
     }
 
     fn expr(&mut self, e: &Expr) -> bool {
@@ -175,9 +268,21 @@ impl Walker<'_> {
             Expr::Unary(u) => self.expr(&u.expr),
             Expr::Cast(c) => self.expr(&c.expr),
             Expr::Reference(r) => self.expr(&r.expr),
+            Expr::Range(r) => {
+                // Uniform when both ends are (a missing end is no value).
+                let s = r.start.as_ref().is_none_or(|s| self.expr(s));
+                let t = r.end.as_ref().is_none_or(|t| self.expr(t));
+                s && t
+            }
             Expr::Binary(b) => {
                 let l = self.expr(&b.left);
-                let r = self.expr(&b.right);
+                let r = match b.op {
+                    // The right side runs only where the left side is true (`&&`) or
+                    // false (`||`): under non-uniform control when the left side is.
+                    syn::BinOp::And(_) => self.guarded(&b.left, true, l, AND_NOTE, |w| w.expr(&b.right)),
+                    syn::BinOp::Or(_) => self.guarded(&b.left, false, l, OR_NOTE, |w| w.expr(&b.right)),
+                    _ => self.expr(&b.right),
+                };
                 if let Some(target) = assigned_var(&b.left) {
                     if is_compound(&b.op) {
                         self.assign(&target, l && r);
@@ -205,8 +310,10 @@ impl Walker<'_> {
             Expr::Call(c) => {
                 let name = call_name(e).unwrap_or_default();
                 if SYNC_CALLS.contains(&name.as_str()) {
-                    if let Some(why) = self.control() {
-                        self.fail(c.func.span(), &format!("{name}()"), why);
+                    if self.in_share {
+                        self.fail_in_share(call_site(c), &format!("{name}()"));
+                    } else if let Some(why) = self.control() {
+                        self.fail(call_site(c), &format!("{name}()"), why);
                     }
                 }
                 let mut all = true;
@@ -218,7 +325,10 @@ impl Walker<'_> {
                                 self.scopes.last_mut().unwrap().insert(n, false);
                             }
                         }
+                        let saved = self.in_share;
+                        self.in_share |= name == "group_share";
                         self.expr(&cl.body);
+                        self.in_share = saved;
                         self.scopes.pop();
                         all = false;
                     } else {
@@ -226,17 +336,18 @@ impl Walker<'_> {
                     }
                 }
                 let nonuniform_fn = name.starts_with("subgroup_") || name.starts_with("atomic_") || name == "group_share";
-                all && !nonuniform_fn
+                // A helper given a buffer may read memory or use atomics.
+                let memory = c.args.iter().any(|a| self.is_memory(a));
+                all && !nonuniform_fn && !memory
             }
             Expr::If(i) => {
                 let c = self.expr(&i.cond);
-                let span = i.cond.span();
-                let t = self.with_divergence(c, span, |w| {
+                let t = self.guarded(&i.cond, true, c, STARTS_HERE, |w| {
                     w.block(&i.then_branch);
                     block_tail_uniform(w, &i.then_branch)
                 });
                 let e = match &i.else_branch {
-                    Some((_, eb)) => self.with_divergence(c, span, |w| w.expr(eb)),
+                    Some((_, eb)) => self.guarded(&i.cond, false, c, STARTS_HERE, |w| w.expr(eb)),
                     None => true,
                 };
                 c && t && e
@@ -247,11 +358,15 @@ impl Walker<'_> {
             }
             Expr::While(w) => {
                 let c = self.expr(&w.cond);
-                self.loop_body(c, w.cond.span(), &w.body);
+                let why = || {
+                    let cond = Cond { tokens: w.cond.to_token_stream(), holds: true };
+                    (syn::Error::new_spanned(&w.cond, STARTS_HERE), Some(cond))
+                };
+                self.loop_body(c, why, &w.body);
                 true
             }
             Expr::Loop(l) => {
-                self.loop_body(true, l.span(), &l.body);
+                self.loop_body(true, || unreachable!("a `loop` has no condition"), &l.body);
                 true
             }
             Expr::ForLoop(f) => {
@@ -260,24 +375,26 @@ impl Walker<'_> {
                 if let Some((n, _)) = pat_name(&f.pat) {
                     self.scopes.last_mut().unwrap().insert(n, r);
                 }
-                self.loop_body(r, f.expr.span(), &f.body);
+                let why = || (syn::Error::new_spanned(&f.expr, STARTS_HERE), None);
+                self.loop_body(r, why, &f.body);
                 self.scopes.pop();
                 true
             }
-            Expr::Break(_) | Expr::Continue(_) => {
-                if self.divergent.is_some() {
-                    self.found_exit = true;
-                }
+            Expr::Break(_) => {
+                self.exit(e, "break");
+                true
+            }
+            Expr::Continue(_) => {
+                self.exit(e, "continue");
                 true
             }
             Expr::Return(r) => {
                 if let Some(v) = &r.expr {
                     self.expr(v);
                 }
-                if let Some(d) = self.divergent {
-                    self.found_exit = true;
+                if let Some(notes) = self.exit(e, "return") {
                     if self.exited.is_none() {
-                        self.exited = Some(d);
+                        self.exited = Some(notes);
                     }
                 }
                 true
@@ -292,6 +409,11 @@ impl Walker<'_> {
 
     fn is_nonuniform_root(&self, p: &syn::ExprPath) -> bool {
         p.path.segments.len() == 1 && self.params.nonuniform.contains(&p.path.segments[0].ident.to_string())
+    }
+
+    /// Whether a call argument is (a reference into) a storage buffer or workgroup memory.
+    fn is_memory(&self, a: &Expr) -> bool {
+        root_name(a).is_some_and(|r| self.lookup(&r).is_none() && self.params.memory.contains(&r))
     }
 
     fn assign(&mut self, name: &str, uniform: bool) {
@@ -349,6 +471,8 @@ fn root_name(e: &Expr) -> Option<String> {
         Expr::Index(i) => root_name(&i.expr),
         Expr::Paren(p) => root_name(&p.expr),
         Expr::Unary(u) => root_name(&u.expr),
+        Expr::Reference(r) => root_name(&r.expr),
+        Expr::Group(g) => root_name(&g.expr),
         _ => None,
     }
 }
@@ -368,10 +492,12 @@ pub fn check(body: &Block, params: &Params) -> syn::Result<()> {
             nonuniform_vars: nonuniform_vars.clone(),
             changed: false,
             divergent: None,
+            cond: None,
             exited: None,
             error: None,
             check: false,
-            found_exit: false,
+            first_exit: None,
+            in_share: false,
         };
         w.block(body);
         let changed = w.changed;
@@ -386,10 +512,12 @@ pub fn check(body: &Block, params: &Params) -> syn::Result<()> {
         nonuniform_vars,
         changed: false,
         divergent: None,
+        cond: None,
         exited: None,
         error: None,
         check: true,
-        found_exit: false,
+        first_exit: None,
+        in_share: false,
     };
     w.block(body);
     match w.error {
@@ -451,10 +579,10 @@ pub fn check_grid_closures(body: &Block, params: &Params, all_params: &HashSet<S
                         || self.params.uniform_buffers.contains(&n)
                         || (!self.all.contains(&n) && !self.locals.iter().any(|s| s.contains(&n)));
                     if !ok && self.err.is_none() {
-                        self.err = Some(syn::Error::new(
-                            p.span(),
+                        self.err = Some(syn::Error::new_spanned(
+                            p,
                             format!(
-                                "`group_share` closures may read only their group index, uniform parameters and constants, not `{n}`: with `group = Grid` the host runs the closure before the dispatch"
+                                "`group_share` closures may read only their group index, uniform parameters and constants, not `{n}`: with `group = Grid` the host runs the closure before the dispatch (any kernel can be launched at `Grid` level)"
                             ),
                         ));
                     }

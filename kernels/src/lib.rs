@@ -9,6 +9,7 @@
 //! to pixel `slot_pixel[g]` (Morton order), and only `idrays` is ever reordered.
 
 pub mod compact;
+pub mod copy;
 pub mod extend;
 pub mod layout;
 pub mod rng;

@@ -1,5 +1,6 @@
 //! Workgroup reduction: workgroup memory, barriers in uniform control flow, a tree
-//! reduction loop whose bounds are uniform.
+//! reduction loop whose bounds are uniform, and a `for` loop over a uniform range with a
+//! barrier in its body (the total is broadcast to every slot by doubling).
 use cohort::prelude::*;
 
 #[kernel(workgroup = 256)]
@@ -26,7 +27,15 @@ pub fn reduce_sum(
         workgroup_barrier();
         stride /= 2;
     }
-    if li == 0 {
-        sums[wg as usize] = tile[0];
+    // Broadcast: after step `s` the first `2 << s` slots hold the total.
+    for s in 0..8u32 {
+        let w = 1u32 << s;
+        if li >= w && li < 2 * w {
+            tile[li as usize] = tile[(li - w) as usize];
+        }
+        workgroup_barrier();
+    }
+    if li == 255 {
+        sums[wg as usize] = tile[255];
     }
 }
