@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Runs the GPU suites and benchmarks on a machine with a real GPU, from binaries built
+# elsewhere into bin-gpu/ (see scripts/build-gpu-bins.sh). Writes logs and stats under
+# $OUT (default ./gpu-out). Used through the device tool; see BENCHMARKS.md.
+set -uo pipefail
+OUT="${OUT:-./gpu-out}"
+mkdir -p "$OUT"
+B=bin-gpu
+export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
+export CI=true COHORT_VK_VALIDATION=0
+nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv | tee "$OUT/gpu.txt"
+{
+for t in difftest random_kernels traversal runtime_dispatch runtime_errors; do
+  [ -x "$B/$t" ] || continue
+  echo "== $t"; (cd tests && ../$B/$t --test-threads 1 2>&1 | tail -4)
+done
+} 2>&1 | tee "$OUT/tests.log"
+echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tail -3
+for be in vulkan wgpu; do
+  echo "== kernel bench $be"; $B/kernel_bench confroom $be 2>&1 | tee "$OUT/kernel_bench_$be.txt"
+done
+for be in vulkan wgpu; do
+  for s in cornell confroom fairyforest sponza stanford; do
+    echo "== render $s $be"
+    $B/cohort render --scene $s --backend $be --width 1024 --height 1024 --time ${RENDER_SECONDS:-2} \
+      --out "$OUT/r.exr" --png "$OUT/${s}_$be.png" --stats "$OUT/${s}_$be.json" 2>&1 | grep -E "paths/pixel|kernel time|paths/s|rays/s"
+  done
+done 2>&1 | tee "$OUT/render.log"
+rm -f "$OUT/r.exr"
