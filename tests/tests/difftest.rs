@@ -2,8 +2,9 @@
 //! through ash) with the same inputs, and the outputs must agree with each other and,
 //! where the kernel has no cross-invocation communication, with the host run of the
 //! same Rust function. Integer results are compared exactly; float results exactly
-//! between backends unless stated, and within a stated ulp bound against the host
-//! (GPU drivers may contract `a*b+c` into an FMA and use their own transcendentals).
+//! between backends unless stated, and within a bound stated at each comparison against
+//! the host (GPU drivers may contract `a*b+c` into an FMA and use their own
+//! transcendentals). The suite passes on lavapipe and on an NVIDIA H200 (BENCHMARKS.md).
 
 mod common;
 use cohort::host::for_each_invocation;
@@ -43,7 +44,13 @@ fn saxpy_matches_host() {
     });
     for o in outs {
         let o: Vec<f32> = o.into_iter().map(f32::from_bits).collect();
-        assert_close("saxpy gpu vs host", &o, &host, 1, 0.0);
+        // A driver may fuse a*x + y into one FMA (NVIDIA does): the product is then not
+        // rounded, so results differ by up to one rounding of the terms, 2^-24 (|a x| + |y|),
+        // which is many ulps of a result that cancels. Bound: twice that.
+        for k in 0..n as usize {
+            let bound = 2.0 * f32::EPSILON * (p.a * x[k]).abs().max(y0[k].abs());
+            assert!((o[k] - host[k]).abs() <= bound, "saxpy element {k}: {} vs {} (bound {bound})", o[k], host[k]);
+        }
         assert_eq!(o[n as usize - 1], y0[n as usize - 1], "bounds check must leave the tail alone");
     }
 }
@@ -72,8 +79,11 @@ fn structs_trace_spheres() {
     for o in outs {
         for (g, h) in o.iter().zip(&host) {
             assert_eq!((g.hit, g.sphere), (h.hit, h.sphere));
-            assert_close("t", &[g.t], &[h.t], 64, 1e-4);
-            assert_close("normal", &g.normal.to_array(), &h.normal.to_array(), 64, 1e-5);
+            // The hit distance comes from b^2 - c, which cancels near grazing hits, and
+            // drivers may contract it into FMAs: t agrees to 1e-4 relative, and the normal
+            // built from it to 1e-3.
+            assert!((g.t - h.t).abs() <= 1e-4 * h.t.abs().max(1.0), "t: {} vs {}", g.t, h.t);
+            assert_close("normal", &g.normal.to_array(), &h.normal.to_array(), 64, 1e-3);
         }
     }
 }
