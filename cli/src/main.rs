@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use cohort::runtime::{BackendKind, Device};
-use cohort_render::{output, Algorithm, Budget, RenderOptions, Renderer};
+use cohort_render::{output, Algorithm, Budget, InPatch, RenderOptions, Renderer};
 use cohort_scenes::embedded;
 
 #[derive(Parser)]
@@ -34,9 +34,22 @@ struct RenderArgs {
     /// `wgpu` (WGSL) or `vulkan` (SPIR-V through ash); default: the best found.
     #[arg(long)]
     backend: Option<String>,
-    /// Sampling strategy for diffuse bounces.
+    /// Diffuse sampling: `normal` (independent cosine sampling), or coherent sampling
+    /// shared by a group: `warp`, `block_256`, `block_512`, `block_1024`, `grid`.
     #[arg(long, default_value = "normal")]
     algorithm: String,
+    /// N: the hemisphere is split into N x 4N patches for coherent sampling (1..=1000).
+    #[arg(long, default_value_t = 64)]
+    n: u32,
+    /// How a ray samples inside its group's patch: `uniform` (the paper) or `cosine`.
+    #[arg(long, default_value = "uniform")]
+    in_patch: String,
+    /// Russian roulette per `path` or one draw per `group` (the paper's `_rr`).
+    #[arg(long, default_value = "path")]
+    rr: String,
+    /// Interleaved sampling factor D (odd): pixel coordinates are multiplied by D.
+    #[arg(long, default_value_t = 1)]
+    interleave: u32,
     /// Image width (default: the scene's film).
     #[arg(long)]
     width: Option<u32>,
@@ -103,7 +116,18 @@ fn load_scene(name: &str) -> Result<cohort_scenes::Scene, String> {
 }
 
 fn render(a: RenderArgs) -> Result<(), String> {
-    let algorithm = Algorithm::parse(&a.algorithm).ok_or_else(|| format!("unknown algorithm `{}` (available: normal)", a.algorithm))?;
+    let algorithm = Algorithm::parse(&a.algorithm)
+        .ok_or_else(|| format!("unknown algorithm `{}` (available: normal, warp, block_256, block_512, block_1024, grid)", a.algorithm))?;
+    let in_patch = match a.in_patch.as_str() {
+        "uniform" => InPatch::Uniform,
+        "cosine" => InPatch::Cosine,
+        other => return Err(format!("unknown --in-patch `{other}` (uniform or cosine)")),
+    };
+    let group_rr = match a.rr.as_str() {
+        "path" => false,
+        "group" => true,
+        other => return Err(format!("unknown --rr `{other}` (path or group)")),
+    };
     let budget = match (a.paths, a.time) {
         (_, Some(t)) if !(t > 0.0 && t.is_finite()) => return Err(format!("--time {t} must be a positive number of seconds")),
         (_, Some(t)) => Budget::KernelTime(Duration::from_secs_f64(t)),
@@ -122,7 +146,18 @@ fn render(a: RenderArgs) -> Result<(), String> {
     }
     .map_err(|e| e.to_string())?;
     let info = device.info().clone();
-    let opts = RenderOptions { algorithm, budget, seed: a.seed, size, compact: !a.no_compact, ..Default::default() };
+    let opts = RenderOptions {
+        algorithm,
+        in_patch,
+        patches_n: a.n,
+        group_rr,
+        interleave: a.interleave,
+        budget,
+        seed: a.seed,
+        size,
+        compact: !a.no_compact,
+        ..Default::default()
+    };
     let mut renderer = Renderer::new(&device, &scene, opts).map_err(|e| e.to_string())?;
     let (w, h) = renderer.size();
     eprintln!("{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}", a.scene, scene.triangles.len(), info.adapter_name, info.backend.name(), algorithm.name());
@@ -144,7 +179,16 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!("scene          {} ({w}x{h}, {} triangles)", a.scene, scene.triangles.len());
     println!("device         {} [{}], subgroup {}", info.adapter_name, info.backend.name(), info.subgroup_size);
-    println!("algorithm      {}{}", algorithm.name(), if a.no_compact { " (no compaction)" } else { "" });
+    let config = format!(
+        "{}{}{}, N = {}, in-patch {}, D = {}",
+        algorithm.name(),
+        if group_rr { "_rr" } else { "" },
+        if a.no_compact { " (NO)" } else { "" },
+        a.n,
+        a.in_patch,
+        a.interleave
+    );
+    println!("algorithm      {config}");
     println!("paths/pixel    {:.2} ({} paths, {} iterations)", stats.paths_per_pixel(), stats.completed_paths, stats.iterations);
     println!("kernel time    {:.1} ms: traverse {:.1}, extend {:.1}, compact {:.1}", ms(k.total()), ms(k.traverse), ms(k.extend), ms(k.compact));
     println!("paths/s        {:.3} M (per kernel second)", stats.paths_per_second() / 1e6);
@@ -156,6 +200,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
+            "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "interleave": a.interleave,
             "compaction": !a.no_compact, "seed": a.seed,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,

@@ -77,6 +77,10 @@ pub fn extend<S: DiffuseSampler>(
     flags: &mut [u32],
     completed: &[AtomicU32],
 ) {
+    // The group's shared draws come first, in uniform control flow: the patch of
+    // coherent sampling and the group's Russian-roulette number.
+    let shared_patch = group_share(|group| S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n));
+    let shared_rr = group_share(|group| uniform(stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11), 0));
     let i = gi as usize;
     if gi >= count[0] {
         return;
@@ -115,7 +119,7 @@ pub fn extend<S: DiffuseSampler>(
         let u = Vec2::new(uniform(key, 2), uniform(key, 3));
         if m.kind == DIFFUSE {
             if (front || two_sided) && m.color.max_element() > 0.0 {
-                let s = S::sample(n, u);
+                let s = S::sample(n, u, shared_patch, f.patches_n);
                 new_d = s.truncate();
                 thr = thr * m.color * s.w;
                 new_o = offset_origin(p, n);
@@ -159,7 +163,11 @@ pub fn extend<S: DiffuseSampler>(
             alive = false;
         }
         if alive && bounce + 1 >= f.rr_depth {
-            if uniform(key, 5) < f.rr_continue {
+            let mut rr_u = uniform(key, 5);
+            if f.group_rr != 0 {
+                rr_u = shared_rr;
+            }
+            if rr_u < f.rr_continue {
                 thr = thr / f.rr_continue;
             } else {
                 alive = false;

@@ -77,6 +77,13 @@ pub struct Frame {
     pub rr_continue: f32,
     /// Whether the scene has any triangle (traversal of an empty scene is a miss).
     pub has_geometry: u32,
+    /// Iteration of the wavefront loop (group draws change every iteration).
+    pub iteration: u32,
+    /// N of the N x 4N hemisphere patches of coherent sampling.
+    pub patches_n: u32,
+    /// 1: one Russian-roulette draw per coherence group (the paper's `_rr`).
+    pub group_rr: u32,
+    pub pad: u32,
 }
 
 /// `state.w` bits of a ray slot.

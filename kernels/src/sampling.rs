@@ -25,13 +25,17 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt())
 }
 
-/// A strategy for diffuse bounces.
+/// A strategy for diffuse bounces. Coherent strategies draw one value per group of
+/// invocations (`group_value`, computed by the group's leader, or by the host for the
+/// grid) and every ray of the group samples with it.
 #[kernel_trait]
 pub trait DiffuseSampler {
+    /// The group's draw from the random stream `key` (e.g. a hemisphere patch index).
+    fn group_value(key: u32, patches_n: u32) -> u32;
     /// World direction for a bounce at shading normal `n` from random numbers `u`, in
     /// `xyz`; in `w` the factor by which the path throughput is multiplied on top of the
     /// albedo (f·cos/pdf divided by the albedo: 1 for exact cosine sampling).
-    fn sample(n: Vec3, u: Vec2) -> Vec4;
+    fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4;
 }
 
 /// The paper's `normal` algorithm: independent cosine sampling per path.
@@ -39,8 +43,85 @@ pub struct Cosine;
 
 #[kernel_impl]
 impl DiffuseSampler for Cosine {
-    fn sample(n: Vec3, u: Vec2) -> Vec4 {
+    fn group_value(_key: u32, _patches_n: u32) -> u32 {
+        0
+    }
+    fn sample(n: Vec3, u: Vec2, _group_value: u32, _patches_n: u32) -> Vec4 {
         let d = frame(n) * cosine_hemisphere(u);
+        Vec4::new(d.x, d.y, d.z, 1.0)
+    }
+}
+
+/// Patch (i, j) of the N x 4N split of the hemisphere that contains a cosine-distributed
+/// point: patches are chosen with probability proportional to their cosine-weighted
+/// solid angle P(i, j).
+#[kernel_fn]
+pub fn cosine_patch(key: u32, patches_n: u32) -> u32 {
+    let u1 = crate::rng::uniform(key, 0);
+    let u2 = crate::rng::uniform(key, 1);
+    let cos_t = (1.0 - u1).max(0.0).sqrt();
+    let theta = cos_t.min(1.0).acos();
+    let m = 4 * patches_n;
+    let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
+    let i = ((theta / dt) as u32).min(patches_n - 1);
+    let j = ((u2 * m as f32) as u32).min(m - 1);
+    i * m + j
+}
+
+/// The paper's coherent sampler: the group shares a patch; each ray draws its direction
+/// uniformly by solid angle inside it, in its own tangent frame, weighted by its exact
+/// pdf P(i,j)/A(i,j).
+pub struct CoherentUniform;
+
+#[kernel_impl]
+impl DiffuseSampler for CoherentUniform {
+    fn group_value(key: u32, patches_n: u32) -> u32 {
+        cosine_patch(key, patches_n)
+    }
+    fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
+        let m = 4 * patches_n;
+        let i = group_value / m;
+        let j = group_value % m;
+        let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
+        let dp = 2.0 * core::f32::consts::PI / m as f32;
+        let c0 = (i as f32 * dt).cos();
+        let c1 = ((i + 1) as f32 * dt).cos();
+        let cos_t = c0 - u.x * (c0 - c1);
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        let phi = (j as f32 + u.y) * dp;
+        let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+        let d = frame(n) * local;
+        // f cos / pdf over the albedo: (cos / pi) / (P / A), P = dp/2pi (c0^2 - c1^2),
+        // A = dp (c0 - c1), so P / A = (c0 + c1) / 2pi and the factor is 2 cos / (c0 + c1).
+        let w = 2.0 * cos_t / (c0 + c1);
+        Vec4::new(d.x, d.y, d.z, w)
+    }
+}
+
+/// Beyond the paper: cosine-weighted sampling inside the shared patch. Each ray's pdf is
+/// then exactly cos/pi, so the weight is the albedo and in-patch variance disappears.
+pub struct CoherentCosine;
+
+#[kernel_impl]
+impl DiffuseSampler for CoherentCosine {
+    fn group_value(key: u32, patches_n: u32) -> u32 {
+        cosine_patch(key, patches_n)
+    }
+    fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
+        let m = 4 * patches_n;
+        let i = group_value / m;
+        let j = group_value % m;
+        let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
+        let dp = 2.0 * core::f32::consts::PI / m as f32;
+        let c0 = (i as f32 * dt).cos();
+        let c1 = ((i + 1) as f32 * dt).cos();
+        // cos^2 uniform in [c1^2, c0^2] gives density proportional to cos inside the band.
+        let cos2 = c0 * c0 - u.x * (c0 * c0 - c1 * c1);
+        let cos_t = cos2.max(0.0).sqrt();
+        let sin_t = (1.0 - cos2).max(0.0).sqrt();
+        let phi = (j as f32 + u.y) * dp;
+        let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+        let d = frame(n) * local;
         Vec4::new(d.x, d.y, d.z, 1.0)
     }
 }

@@ -10,4 +10,4 @@ pub mod renderer;
 
 pub use gpu_scene::GpuScene;
 pub use image::Image;
-pub use renderer::{Algorithm, Budget, KernelTimes, RenderError, RenderOptions, RenderStats, Renderer};
+pub use renderer::{Algorithm, Budget, InPatch, KernelTimes, RenderError, RenderOptions, RenderStats, Renderer};

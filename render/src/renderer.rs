@@ -5,36 +5,55 @@
 use std::time::{Duration, Instant};
 
 use cohort::runtime::{Device, DispatchStats, GpuBuffer, RuntimeError};
-use cohort::Grid;
+use cohort::{Grid, Group};
 use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter, BLOCK};
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::layout::Frame;
-use cohort_kernels::sampling::{Cosine, DiffuseSampler};
+use cohort_kernels::sampling::{CoherentCosine, CoherentUniform, Cosine, DiffuseSampler};
 use cohort_kernels::traverse::traverse;
 use cohort_scenes::{morton_pixel_order, GpuBvh, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
 use crate::{GpuScene, Image};
 
-/// Sampling strategy of diffuse bounces (the paper's configurations extend this).
+/// A configuration of the paper: which invocations share a coherent draw, and whether
+/// diffuse bounces sample coherently at all.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Algorithm {
-    /// Independent cosine sampling per path: the paper's reference `normal`.
-    Normal,
+pub struct Algorithm {
+    pub group: Group,
+    /// false: the reference `normal` (independent cosine sampling per path).
+    pub coherent: bool,
 }
 
 impl Algorithm {
+    pub const NORMAL: Algorithm = Algorithm { group: Group::Thread, coherent: false };
+
+    /// `normal`, `warp`, `block_256`, `block_512`, `block_1024`, `grid` (and any
+    /// `block_N` with N a multiple of 32 up to 1024).
     pub fn parse(s: &str) -> Option<Algorithm> {
-        match s {
-            "normal" => Some(Algorithm::Normal),
-            _ => None,
+        if s == "normal" {
+            return Some(Algorithm::NORMAL);
+        }
+        let group = Group::parse(s)?;
+        match group {
+            Group::Thread => None,
+            Group::Block(n) if n % 32 != 0 => None,
+            _ => Some(Algorithm { group, coherent: true }),
         }
     }
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Normal => "normal",
-        }
+
+    pub fn name(self) -> String {
+        if self.coherent { self.group.label() } else { "normal".into() }
     }
+}
+
+/// How a ray samples inside its group's patch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InPatch {
+    /// Uniform by solid angle, weighted by the exact pdf (the paper).
+    Uniform,
+    /// Cosine-weighted: pdf exactly cos/pi (beyond the paper).
+    Cosine,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -48,6 +67,13 @@ pub enum Budget {
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     pub algorithm: Algorithm,
+    pub in_patch: InPatch,
+    /// N of the N x 4N patches (1..=1000).
+    pub patches_n: u32,
+    /// One Russian-roulette draw per group (`_rr`).
+    pub group_rr: bool,
+    /// Interleaved sampling: pixel coordinates multiplied by this odd factor (1 = off).
+    pub interleave: u32,
     pub budget: Budget,
     pub seed: u32,
     /// Film size; `None` keeps the scene's.
@@ -60,7 +86,18 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { algorithm: Algorithm::Normal, budget: Budget::PathsPerPixel(16), seed: 1, size: None, compact: true, rr_continue: 0.8 }
+        RenderOptions {
+            algorithm: Algorithm::NORMAL,
+            in_patch: InPatch::Uniform,
+            patches_n: 64,
+            group_rr: false,
+            interleave: 1,
+            budget: Budget::PathsPerPixel(16),
+            seed: 1,
+            size: None,
+            compact: true,
+            rr_continue: 0.8,
+        }
     }
 }
 
@@ -162,6 +199,15 @@ impl<'d> Renderer<'d> {
         if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
             return Err(RenderError::Options(format!("Russian roulette continuation {} is not in (0, 1]", opts.rr_continue)));
         }
+        if opts.patches_n == 0 || opts.patches_n > 1000 {
+            return Err(RenderError::Options(format!("patch count N = {} is not in 1..=1000", opts.patches_n)));
+        }
+        if opts.interleave == 0 || opts.interleave % 2 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
+            return Err(RenderError::Options(format!(
+                "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
+                opts.interleave
+            )));
+        }
         let bvh = GpuBvh::build(scene).map_err(|e| RenderError::Bvh(e.to_string()))?;
         let gpu = GpuScene::upload(device, scene, &bvh)?;
         let f = camera.frame();
@@ -184,9 +230,22 @@ impl<'d> Renderer<'d> {
             rr_depth: 0,
             rr_continue: opts.rr_continue,
             has_geometry: (gpu.triangle_count > 0) as u32,
+            iteration: 0,
+            patches_n: opts.patches_n,
+            group_rr: opts.group_rr as u32,
+            pad: 0,
         };
         let n = n as usize;
-        let slot_to_pixel = morton_pixel_order(w, h);
+        // Interleaved sampling: slot g renders pixel D * Morton(g) (mod the size), which
+        // spreads a group's block of pixels over the image.
+        let d = opts.interleave;
+        let slot_to_pixel: Vec<u32> = morton_pixel_order(w, h)
+            .into_iter()
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
+            })
+            .collect();
         let blocks = n.div_ceil(BLOCK as usize);
         let paths = Paths {
             slot_pixel: device.upload(&slot_to_pixel)?,
@@ -213,8 +272,10 @@ impl<'d> Renderer<'d> {
 
     /// Renders until the budget is spent. `progress` receives the fraction done.
     pub fn render(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
-        match self.opts.algorithm {
-            Algorithm::Normal => self.render_with::<Cosine>(&mut progress),
+        match (self.opts.algorithm.coherent, self.opts.in_patch) {
+            (false, _) => self.render_with::<Cosine>(&mut progress),
+            (true, InPatch::Uniform) => self.render_with::<CoherentUniform>(&mut progress),
+            (true, InPatch::Cosine) => self.render_with::<CoherentCosine>(&mut progress),
         }
     }
 
@@ -225,7 +286,7 @@ impl<'d> Renderer<'d> {
         let start = Instant::now();
         let spec_init = init_paths::spec(d, None);
         let spec_t = traverse::spec(d, None);
-        let spec_e = extend::spec(d, None);
+        let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
         let spec_cc = compact_count::spec(d, None);
         let spec_co = compact_offsets::spec(d, None);
         let spec_cs = compact_scatter::spec(d, None);
@@ -234,6 +295,7 @@ impl<'d> Renderer<'d> {
         let mut cur = 0usize;
         let mut live = n as u64;
         loop {
+            self.frame.iteration = stats.iterations;
             let mut b = d.batch();
             traverse::record(&mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits)?;
             extend::record::<S>(
@@ -285,4 +347,8 @@ impl<'d> Renderer<'d> {
         }
         Ok(Image { width: w, height: h, pixels, paths })
     }
+}
+
+fn gcd(a: u32, b: u32) -> u32 {
+    if b == 0 { a } else { gcd(b, a % b) }
 }

@@ -89,3 +89,59 @@ fn converges_on_shared_scenes() {
         assert!(reference.mean().max_element() > 0.01, "{name}: reference is black");
     }
 }
+
+/// Every coherent configuration is unbiased: its image mean on the shared stanford-like
+/// scene agrees with `normal`'s within the confidence interval estimated from independent
+/// seeds (coherent pixels are correlated inside a group, so the spread across whole
+/// renders, not across pixels, measures the error).
+#[test]
+fn coherent_configurations_converge_to_normal() {
+    use cohort::Group;
+    use cohort_render::{Algorithm, InPatch};
+    let d = match devices().into_iter().next() {
+        Some(d) => d,
+        None => return,
+    };
+    let scene = shared("stanford-like");
+    let seeds = 6u32;
+    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool| -> (f64, f64) {
+        let means: Vec<f64> = (0..seeds)
+            .map(|s| {
+                let opts = RenderOptions {
+                    algorithm,
+                    in_patch,
+                    group_rr,
+                    compact,
+                    patches_n: 8,
+                    budget: Budget::PathsPerPixel(48),
+                    seed: 1000 + s,
+                    size: Some((16, 16)),
+                    ..Default::default()
+                };
+                let mut r = Renderer::new(&d, &scene, opts).unwrap();
+                let (img, _) = r.render(|_, _| {}).unwrap();
+                let m = img.mean();
+                ((m.x + m.y + m.z) / 3.0) as f64
+            })
+            .collect();
+        let mean = means.iter().sum::<f64>() / seeds as f64;
+        let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+        (mean, var / seeds as f64)
+    };
+    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true);
+    let configs = [
+        (Group::Warp, InPatch::Uniform, false, true),
+        (Group::Block(256), InPatch::Uniform, false, true),
+        (Group::Grid, InPatch::Uniform, false, true),
+        (Group::Warp, InPatch::Uniform, true, false),
+        (Group::Block(256), InPatch::Cosine, true, false),
+    ];
+    for (group, in_patch, rr, compact) in configs {
+        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact);
+        let se = (v + v0).sqrt();
+        assert!(
+            (m - m0).abs() < 5.0 * se + 0.01 * m0,
+            "{group:?} {in_patch:?} rr={rr} compact={compact}: mean {m:.4} vs normal {m0:.4} (se {se:.4})"
+        );
+    }
+}
