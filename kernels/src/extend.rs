@@ -8,8 +8,8 @@
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
 use crate::layout::*;
-use crate::rng::{stream, uniform};
-use crate::sampling::{fresnel_dielectric, ggx_vndf, smith_g1, DiffuseSampler};
+use crate::rng::{hash, stream, uniform};
+use crate::sampling::{cell_point, fresnel_dielectric, ggx_vndf, smith_g1, DiffuseSampler};
 use cohort::prelude::*;
 
 /// Camera ray through a random point of `pixel`: origin in xyz (w = tmin), direction.
@@ -81,6 +81,7 @@ pub fn extend<S: DiffuseSampler>(
     // coherent sampling and the group's Russian-roulette number.
     let shared_patch = group_share(|group| S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n));
     let shared_rr = group_share(|group| uniform(stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11), 0));
+    let shared_cell = group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
     let i = gi as usize;
     if gi >= count[0] {
         return;
@@ -133,7 +134,13 @@ pub fn extend<S: DiffuseSampler>(
         } else if m.kind == ROUGH_CONDUCTOR {
             let fr = crate::sampling::frame(n);
             let wo = fr.transpose() * -d;
-            let mn = ggx_vndf(wo, m.param, u);
+            // VNDF sampling maps the unit square onto the visible normals preserving
+            // measure, so a shared cell of the square keeps each ray's pdf unchanged.
+            let mut ug = u;
+            if f.coherent_glossy != 0 {
+                ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
+            }
+            let mn = ggx_vndf(wo, m.param, ug);
             let wi = mn * (2.0 * wo.dot(mn)) - wo;
             if wi.z > 0.0 {
                 new_d = fr * wi;

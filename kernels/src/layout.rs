@@ -83,7 +83,9 @@ pub struct Frame {
     pub patches_n: u32,
     /// 1: one Russian-roulette draw per coherence group (the paper's `_rr`).
     pub group_rr: u32,
-    pub pad: u32,
+    /// 1: glossy (GGX) bounces also sample coherently: the group shares a cell of a
+    /// N x N grid over the VNDF's unit-square domain.
+    pub coherent_glossy: u32,
 }
 
 /// `state.w` bits of a ray slot.

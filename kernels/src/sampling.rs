@@ -126,6 +126,53 @@ impl DiffuseSampler for CoherentCosine {
     }
 }
 
+/// Shirley–Chiu concentric map of the unit square onto the unit disk: area-preserving,
+/// and continuous, so square cells map to compact disk cells.
+#[kernel_fn]
+pub fn concentric_disk(p: Vec2) -> Vec2 {
+    let a = 2.0 * p.x - 1.0;
+    let b = 2.0 * p.y - 1.0;
+    let mut r = 0.0f32;
+    let mut phi = 0.0f32;
+    if a * a > b * b {
+        r = a;
+        phi = core::f32::consts::FRAC_PI_4 * (b / a);
+    } else if b != 0.0 {
+        r = b;
+        phi = core::f32::consts::FRAC_PI_2 - core::f32::consts::FRAC_PI_4 * (a / b);
+    }
+    Vec2::new(r * phi.cos(), r * phi.sin())
+}
+
+/// Point of cell `cell` of a `k` x `k` grid over the unit square, at offset `u` in it.
+#[kernel_fn]
+pub fn cell_point(cell: u32, k: u32, u: Vec2) -> Vec2 {
+    let cx = (cell % k) as f32;
+    let cy = (cell / k) as f32;
+    Vec2::new((cx + u.x) / k as f32, (cy + u.y) / k as f32)
+}
+
+/// Beyond the paper: equal-area patches. The unit square is cut into 2N x 2N cells
+/// (as many patches as N x 4N) and mapped to the hemisphere by the concentric disk map
+/// and Malley's projection, which together carry uniform area to the cosine-weighted
+/// hemisphere. Every patch then has the same probability, the group picks one uniformly,
+/// and each ray's direction has pdf exactly cos/pi (weight 1).
+pub struct CoherentEqualArea;
+
+#[kernel_impl]
+impl DiffuseSampler for CoherentEqualArea {
+    fn group_value(key: u32, patches_n: u32) -> u32 {
+        let k = 2 * patches_n;
+        crate::rng::hash(key) % (k * k)
+    }
+    fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
+        let d2 = concentric_disk(cell_point(group_value, 2 * patches_n, u));
+        let z = (1.0 - d2.x * d2.x - d2.y * d2.y).max(0.0).sqrt();
+        let d = frame(n) * Vec3::new(d2.x, d2.y, z);
+        Vec4::new(d.x, d.y, d.z, 1.0)
+    }
+}
+
 /// Smith masking G1 for GGX, with `cos` the cosine to the macro normal.
 #[kernel_fn]
 pub fn smith_g1(cos: f32, alpha: f32) -> f32 {

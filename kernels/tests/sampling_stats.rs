@@ -7,7 +7,7 @@
 //!   without bias.
 
 use cohort_kernels::rng::{stream, uniform};
-use cohort_kernels::sampling::{cosine_patch, CoherentCosine, CoherentUniform, Cosine, DiffuseSampler};
+use cohort_kernels::sampling::{cosine_patch, CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
 use glam::{Vec2, Vec3};
 use std::f64::consts::PI;
 
@@ -63,7 +63,7 @@ fn patch_probabilities_sum_to_one_and_are_followed() {
 fn pdf(strategy: &str, dir: Vec3) -> f64 {
     let cos_t = dir.z.clamp(0.0, 1.0) as f64;
     match strategy {
-        "cosine" | "coherent_cosine" => cos_t / PI,
+        "cosine" | "coherent_cosine" | "coherent_equal_area" => cos_t / PI,
         "coherent_uniform" => {
             let theta = cos_t.acos();
             let i = ((theta / (PI / 2.0 / N as f64)) as u32).min(N - 1);
@@ -83,6 +83,7 @@ fn sample(strategy: &str, k: u32, group: u32) -> (Vec3, f32) {
         "cosine" => Cosine::sample(n, u, Cosine::group_value(g, N), N),
         "coherent_uniform" => CoherentUniform::sample(n, u, CoherentUniform::group_value(g, N), N),
         "coherent_cosine" => CoherentCosine::sample(n, u, CoherentCosine::group_value(g, N), N),
+        "coherent_equal_area" => CoherentEqualArea::sample(n, u, CoherentEqualArea::group_value(g, N), N),
         _ => unreachable!(),
     };
     (s.truncate(), s.w)
@@ -90,7 +91,7 @@ fn sample(strategy: &str, k: u32, group: u32) -> (Vec3, f32) {
 
 #[test]
 fn stated_pdfs_integrate_to_one() {
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine"] {
+    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
         // Midpoint rule over (cos theta, phi); the pdfs are constant in phi.
         let steps = 20_000;
         let mut total = 0.0;
@@ -108,7 +109,7 @@ fn directions_follow_their_pdf() {
     // Grid: 2 theta cells per patch band, 2 phi cells per patch column.
     let (nt, np) = (2 * N, 2 * 4 * N);
     let samples = 300_000u32;
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine"] {
+    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
         let mut counts = vec![0.0; (nt * np) as usize];
         for k in 0..samples {
             // One sample per group: chi-square needs independent samples (members of a
@@ -147,7 +148,7 @@ fn weighted_estimates_are_unbiased() {
     // Exact: integral (1 + x/2 + 2 z^2) cos/pi = 1 + 0 + 2 * E[z^2] = 1 + 2 * 1/2 = 2.
     let exact = 2.0;
     let samples = 400_000u32;
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine"] {
+    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
         let mut sum = 0.0;
         let mut sq = 0.0;
         for k in 0..samples {
@@ -162,4 +163,27 @@ fn weighted_estimates_are_unbiased() {
         let se = (var / (samples / 32) as f64).sqrt();
         assert!((mean - exact).abs() < 5.0 * se + 1e-3, "{strategy}: mean {mean} vs {exact} (se {se})");
     }
+}
+
+/// Equal-area cells map into the upper hemisphere with unit directions and weight 1;
+/// that their union follows cos/pi exactly is checked by `directions_follow_their_pdf`,
+/// so every cell, drawn uniformly, carries the same cosine-weighted measure.
+#[test]
+fn equal_area_cells_give_hemisphere_directions() {
+    let k = 2 * N;
+    for cell in [0, 3, k + 1, k * k / 2, k * k - 1] {
+        for s in 0..200 {
+            let key = stream(5, s, 0, 0);
+            let d = CoherentEqualArea::sample(Vec3::Z, Vec2::new(uniform(key, 0), uniform(key, 1)), cell, N);
+            assert!(d.z >= 0.0 && (d.truncate().length() - 1.0).abs() < 1e-4 && d.w == 1.0, "cell {cell}: {d}");
+        }
+    }
+    // Cells are drawn uniformly.
+    let mut counts = vec![0.0; (k * k) as usize];
+    let draws = 200_000u32;
+    for g in 0..draws {
+        counts[CoherentEqualArea::group_value(stream(9, g, 0, 0), N) as usize] += 1.0;
+    }
+    let expected = vec![draws as f64 / (k * k) as f64; (k * k) as usize];
+    assert_chi2(&counts, &expected, "equal-area cell choice");
 }

@@ -9,7 +9,7 @@ use cohort::{Grid, Group};
 use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter, BLOCK};
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::layout::Frame;
-use cohort_kernels::sampling::{CoherentCosine, CoherentUniform, Cosine, DiffuseSampler};
+use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
 use cohort_kernels::traverse::traverse;
 use cohort_scenes::{morton_pixel_order, GpuBvh, Scene};
 use glam::{UVec4, Vec3, Vec4};
@@ -54,6 +54,8 @@ pub enum InPatch {
     Uniform,
     /// Cosine-weighted: pdf exactly cos/pi (beyond the paper).
     Cosine,
+    /// Equal-area patches through the Shirley–Chiu concentric map (beyond the paper).
+    EqualArea,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -74,6 +76,8 @@ pub struct RenderOptions {
     pub group_rr: bool,
     /// Interleaved sampling: pixel coordinates multiplied by this odd factor (1 = off).
     pub interleave: u32,
+    /// Glossy bounces sample coherently too (beyond the paper).
+    pub coherent_glossy: bool,
     pub budget: Budget,
     pub seed: u32,
     /// Film size; `None` keeps the scene's.
@@ -92,6 +96,7 @@ impl Default for RenderOptions {
             patches_n: 64,
             group_rr: false,
             interleave: 1,
+            coherent_glossy: false,
             budget: Budget::PathsPerPixel(16),
             seed: 1,
             size: None,
@@ -233,7 +238,7 @@ impl<'d> Renderer<'d> {
             iteration: 0,
             patches_n: opts.patches_n,
             group_rr: opts.group_rr as u32,
-            pad: 0,
+            coherent_glossy: (opts.coherent_glossy && opts.algorithm.coherent) as u32,
         };
         let n = n as usize;
         // Interleaved sampling: slot g renders pixel D * Morton(g) (mod the size), which
@@ -276,7 +281,14 @@ impl<'d> Renderer<'d> {
             (false, _) => self.render_with::<Cosine>(&mut progress),
             (true, InPatch::Uniform) => self.render_with::<CoherentUniform>(&mut progress),
             (true, InPatch::Cosine) => self.render_with::<CoherentCosine>(&mut progress),
+            (true, InPatch::EqualArea) => self.render_with::<CoherentEqualArea>(&mut progress),
         }
+    }
+
+    /// Renders with a user's diffuse sampling strategy `S` at the options' group level
+    /// (see `examples/custom_sampler.rs`).
+    pub fn render_custom<S: DiffuseSampler>(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+        self.render_with::<S>(&mut progress)
     }
 
     fn render_with<S: DiffuseSampler>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {

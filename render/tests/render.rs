@@ -104,7 +104,7 @@ fn coherent_configurations_converge_to_normal() {
     };
     let scene = shared("stanford-like");
     let seeds = 6u32;
-    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool| -> (f64, f64) {
+    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool, coherent_glossy: bool| -> (f64, f64) {
         let means: Vec<f64> = (0..seeds)
             .map(|s| {
                 let opts = RenderOptions {
@@ -112,6 +112,7 @@ fn coherent_configurations_converge_to_normal() {
                     in_patch,
                     group_rr,
                     compact,
+                    coherent_glossy,
                     patches_n: 8,
                     budget: Budget::PathsPerPixel(48),
                     seed: 1000 + s,
@@ -128,16 +129,17 @@ fn coherent_configurations_converge_to_normal() {
         let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
         (mean, var / seeds as f64)
     };
-    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true);
+    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true, false);
     let configs = [
-        (Group::Warp, InPatch::Uniform, false, true),
-        (Group::Block(256), InPatch::Uniform, false, true),
-        (Group::Grid, InPatch::Uniform, false, true),
-        (Group::Warp, InPatch::Uniform, true, false),
-        (Group::Block(256), InPatch::Cosine, true, false),
+        (Group::Warp, InPatch::Uniform, false, true, false),
+        (Group::Block(256), InPatch::Uniform, false, true, false),
+        (Group::Grid, InPatch::Uniform, false, true, false),
+        (Group::Warp, InPatch::Uniform, true, false, false),
+        (Group::Block(256), InPatch::Cosine, true, false, false),
+        (Group::Warp, InPatch::EqualArea, false, true, true),
     ];
-    for (group, in_patch, rr, compact) in configs {
-        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact);
+    for (group, in_patch, rr, compact, glossy) in configs {
+        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact, glossy);
         let se = (v + v0).sqrt();
         assert!(
             (m - m0).abs() < 5.0 * se + 0.01 * m0,
