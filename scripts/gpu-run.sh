@@ -19,11 +19,22 @@ echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tai
 for be in vulkan wgpu; do
   echo "== kernel bench $be"; $B/kernel_bench confroom $be 2>&1 | tee "$OUT/kernel_bench_$be.txt"
 done
+# Coherent configurations against normal, same run (issue 4), one scene per run.
+for s in ${COHERENT_SCENES:-confroom}; do
+  for cfg in "normal" "warp" "block_256" "block_512" "block_1024" "grid" "warp --rr group --no-compact" "block_256 --rr group --no-compact" "warp --in-patch equal-area" "normal --no-compact"; do
+    echo "== coherent $s $cfg"
+    $B/cohort render --scene $s --backend vulkan --width 1024 --height 1024 --time ${COHERENT_SECONDS:-1} --n 100 --algorithm $cfg \
+      --out "$OUT/c.exr" --png "$OUT/c.png" 2>&1 | grep -E "^algorithm|paths/s"
+  done
+done 2>&1 | tee "$OUT/coherent.log"
+rm -f "$OUT/c.exr" "$OUT/c.png"
 for be in vulkan wgpu; do
-  for s in cornell confroom fairyforest sponza stanford; do
+  for s in ${RENDER_SCENES:-cornell confroom fairyforest sponza stanford}; do
     echo "== render $s $be"
     $B/cohort render --scene $s --backend $be --width 1024 --height 1024 --time ${RENDER_SECONDS:-2} \
-      --out "$OUT/r.exr" --png "$OUT/${s}_$be.png" --stats "$OUT/${s}_$be.json" 2>&1 | grep -E "paths/pixel|kernel time|paths/s|rays/s"
+      --out "$OUT/r.exr" --png "$OUT/r.png" --stats "$OUT/r_${s}_$be.json" 2>&1 | grep -E "paths/pixel|kernel time|paths/s|rays/s"
   done
 done 2>&1 | tee "$OUT/render.log"
-rm -f "$OUT/r.exr"
+rm -f "$OUT/r.exr" "$OUT/r.png"
+# Few files come back: pack the stats.
+(cd "$OUT" && tar czf stats.tgz r_*.json && rm -f r_*.json)

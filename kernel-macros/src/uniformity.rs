@@ -19,7 +19,7 @@ use std::collections::{HashMap, HashSet};
 use syn::{Block, Expr, Pat, Stmt};
 
 const UNIFORM_BUILTINS: &[&str] = &["workgroup_id", "num_workgroups", "workgroup_index", "workgroup_size", "subgroup_size", "num_subgroups"];
-const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share"];
+const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share", "workgroup_uniform_load"];
 
 const STARTS_HERE: &str = "the non-uniform control flow starts here";
 const AND_NOTE: &str = "the non-uniform control flow starts here: the right side of `&&` runs only for the invocations where this is true";
@@ -338,7 +338,8 @@ impl Walker<'_> {
                 let nonuniform_fn = name.starts_with("subgroup_") || name.starts_with("atomic_") || name == "group_share";
                 // A helper given a buffer may read memory or use atomics.
                 let memory = c.args.iter().any(|a| self.is_memory(a));
-                all && !nonuniform_fn && !memory
+                // workgroup_uniform_load gives every invocation the same value by definition.
+                name == "workgroup_uniform_load" || (all && !nonuniform_fn && !memory)
             }
             Expr::If(i) => {
                 let c = self.expr(&i.cond);

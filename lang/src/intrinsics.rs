@@ -38,6 +38,23 @@ pub mod subgroup_barrier {
     }
 }
 
+/// Reads workgroup memory after a workgroup barrier and gives every invocation the same
+/// value (WGSL's `workgroupUniformLoad`): its result counts as uniform, so it can steer
+/// loops that contain barriers. It must itself be reached in uniform control flow.
+pub fn workgroup_uniform_load<T: Copy>(p: &T) -> T {
+    *p
+}
+pub mod workgroup_uniform_load {
+    pub fn ir<T: super::GpuType>(p: super::Place<T>) -> super::Val<T> {
+        super::with(|c| {
+            let ty = T::naga_type(&mut c.module);
+            let result = c.expr(super::Expression::WorkGroupUniformLoadResult { ty });
+            c.stmt(super::Statement::WorkGroupUniformLoad { pointer: p.ptr, result });
+            super::Val::from_handle(result)
+        })
+    }
+}
+
 /// On the host every invocation runs alone: the group is the one the host runner set.
 pub fn group_share<T>(leader: impl FnOnce(u32) -> T) -> T {
     leader(crate::host::current_group())

@@ -12,7 +12,7 @@ use cohort::Grid;
 use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
 use cohort_kernels::copy::copy_u32;
 use cohort_kernels::layout::{BvhNode, Frame, Triangle, MISS};
-use cohort_kernels::traverse::traverse;
+use cohort_kernels::traverse::{traverse, traverse_persistent};
 use cohort_scenes::{embedded, GpuBvh};
 use glam::{UVec4, Vec3, Vec4};
 
@@ -112,9 +112,26 @@ fn main() {
     let ob2 = d.upload(&o2).unwrap();
     let db2 = d.upload(&d2).unwrap();
     let t_diffuse = time_trace(&ob2, &db2);
+    // Persistent threads: a fixed number of invocations drain an atomic ray counter.
+    let next = d.alloc::<u32>(1).unwrap();
+    let pspec = traverse_persistent::spec(&d, None);
+    let mut persistent = Vec::new();
+    for (label, ob, db) in [("primary", &ob, &db), ("diffuse", &ob2, &db2)] {
+        for threads in [65536u32, 262144] {
+            let mut times = Vec::new();
+            for _ in 0..reps {
+                d.write(&next, 0, &[0]).unwrap();
+                times.push(ns(&traverse_persistent::launch_spec(&d, &pspec, threads, &frame, &count, &next, &ids, &state, ob, db, &nodes, &tris, &hits).unwrap()));
+            }
+            persistent.push((label, threads, median(times)));
+        }
+    }
     println!("scene {scene_name}: {} triangles, {} BVH nodes, {:.1}% primary rays hit", tris_host.len(), bvh.nodes.len(), 100.0 * hit_count as f64 / n as f64);
     println!("traversal primary: {:.3} ms = {:.2} Grays/s", t_primary / 1e6, n as f64 / t_primary);
     println!("traversal diffuse: {:.3} ms = {:.2} Grays/s", t_diffuse / 1e6, n as f64 / t_diffuse);
+    for (label, threads, t) in persistent {
+        println!("persistent traversal {label}, {threads} invocations: {:.3} ms = {:.2} Grays/s", t / 1e6, n as f64 / t);
+    }
 
     // Compaction vs copy, 2^24 elements.
     let m = 1u32 << 24;

@@ -3,7 +3,7 @@
 
 use cohort::runtime::{BackendKind, Device};
 use cohort_kernels::layout::{BvhNode, Frame, Triangle, MISS};
-use cohort_kernels::traverse::traverse;
+use cohort_kernels::traverse::{traverse, traverse_persistent};
 use cohort_scenes::{closest_hit, embedded, GpuBvh};
 use glam::{UVec4, Vec3, Vec4};
 
@@ -49,7 +49,37 @@ fn gpu_traversal_matches_host() {
                 &d.upload(&o).unwrap(), &d.upload(&dir).unwrap(), &d.upload(nodes).unwrap(), &d.upload(tris).unwrap(), &hits,
             )
             .unwrap();
-            let gpu = d.read(&hits).unwrap();
+            let plain = d.read(&hits).unwrap();
+            // The persistent-threads variant, with far fewer invocations than rays.
+            let hits2 = d.alloc::<Vec4>(n as usize).unwrap();
+            let next = d.alloc::<u32>(1).unwrap();
+            traverse_persistent::launch(
+                d, 4096u32, &frame, &d.upload(&[n]).unwrap(), &next, &d.upload(&ids).unwrap(), &d.alloc::<UVec4>(n as usize).unwrap(),
+                &d.upload(&o).unwrap(), &d.upload(&dir).unwrap(), &d.upload(nodes).unwrap(), &d.upload(tris).unwrap(), &hits2,
+            )
+            .unwrap();
+            let persistent = d.read(&hits2).unwrap();
+            assert!(d.read(&next).unwrap()[0] >= n, "the counter covers every ray");
+            // Same triangle everywhere; t to rounding (the two kernels are compiled
+            // separately, and drivers may contract floating-point operations differently).
+            let differ = plain
+                .iter()
+                .zip(&persistent)
+                .filter(|(a, b)| a.w.to_bits() != b.w.to_bits() || (a.x - b.x).abs() > 1e-5 * a.x.abs().max(1.0))
+                .count();
+            // lavapipe (llvmpipe) mistraces a few rays of any loop that wraps the traversal
+            // (also with a per-invocation atomic counter; TOOLCHAIN.md records the same
+            // symptom, cause unknown): there, bound the damage and say so; everywhere else
+            // the persistent kernel must agree exactly.
+            if d.info().adapter_name.contains("llvmpipe") {
+                assert!(differ * 100 <= n as usize, "{name}: persistent traversal differs on {differ} of {n} rays on lavapipe");
+                if differ > 0 {
+                    eprintln!("known lavapipe defect: persistent traversal differs on {differ} of {n} rays ({name})");
+                }
+            } else {
+                assert_eq!(differ, 0, "{name} on {:?}: persistent traversal differs from the plain one on {differ} rays", d.info().backend);
+            }
+            let gpu = plain;
             let mut mismatches = 0;
             for (g, h) in gpu.iter().zip(&host) {
                 let gi = g.w.to_bits();
