@@ -62,6 +62,8 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 #[kernel(workgroup = 64)]
 pub fn extend<S: DiffuseSampler>(
     #[builtin(global_index)] gi: u32,
+    #[builtin(local_index)] li: u32,
+    #[workgroup] wg_done: &mut [AtomicU32; 2],
     f: &Frame,
     count: &[u32],
     idrays: &[u32],
@@ -82,127 +84,144 @@ pub fn extend<S: DiffuseSampler>(
     let shared_patch = group_share(|group| S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n));
     let shared_rr = group_share(|group| uniform(stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11), 0));
     let shared_cell = group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
-    let i = gi as usize;
-    if gi >= count[0] {
-        return;
+    // Completed paths are counted per workgroup and added to the global counters once
+    // per workgroup: one global atomic per path serialised on a single address.
+    if li == 0 {
+        wg_done[0].store(0, Ordering::Relaxed);
+        wg_done[1].store(0, Ordering::Relaxed);
     }
-    let r = idrays[i] as usize;
-    let st = state[r];
-    if st.w & DONE != 0 {
-        flags[i] = 0;
-        return;
-    }
-    let pixel = st.x;
-    let path = st.y;
-    let bounce = st.z;
-    let key = stream(f.seed, pixel, path, bounce + 1);
-    let h = hits[r];
-    let tri = h.w.to_bits();
-    let d = ray_d[r].truncate();
-    let mut thr = beta[r].truncate();
-    let mut l = radiance[r].truncate();
-    let mut alive = false;
-    let mut new_o = Vec3::ZERO;
-    let mut new_d = Vec3::ZERO;
-    if tri == MISS {
-        l += thr * f.environment;
-    } else {
-        let t = tris[tri as usize];
-        let m = materials[t.material as usize];
-        let ng = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
-        let front = ng.dot(d) < 0.0;
-        let two_sided = m.flags & TWO_SIDED != 0;
-        let n = if front { ng } else { -ng };
-        let p = ray_o[r].truncate() + d * h.x;
-        if m.flags & EMITTER != 0 && (front || two_sided) {
-            l += thr * m.emission;
-        }
-        let u = Vec2::new(uniform(key, 2), uniform(key, 3));
-        if m.kind == DIFFUSE {
-            if (front || two_sided) && m.color.max_element() > 0.0 {
-                let s = S::sample(n, u, shared_patch, f.patches_n);
-                new_d = s.truncate();
-                thr = thr * m.color * s.w;
-                new_o = offset_origin(p, n);
-                alive = true;
-            }
-        } else if m.kind == CONDUCTOR {
-            new_d = d - n * (2.0 * d.dot(n));
-            thr = thr * m.color;
-            new_o = offset_origin(p, n);
-            alive = true;
-        } else if m.kind == ROUGH_CONDUCTOR {
-            let fr = crate::sampling::frame(n);
-            let wo = fr.transpose() * -d;
-            // VNDF sampling maps the unit square onto the visible normals preserving
-            // measure, so a shared cell of the square keeps each ray's pdf unchanged.
-            let mut ug = u;
-            if f.coherent_glossy != 0 {
-                ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
-            }
-            let mn = ggx_vndf(wo, m.param, ug);
-            let wi = mn * (2.0 * wo.dot(mn)) - wo;
-            if wi.z > 0.0 {
-                new_d = fr * wi;
-                thr = thr * m.color * smith_g1(wi.z, m.param);
-                new_o = offset_origin(p, n);
-                alive = true;
-            }
+    workgroup_barrier();
+    if gi < count[0] {
+        let i = gi as usize;
+        let r = idrays[i] as usize;
+        let st = state[r];
+        if st.w & DONE != 0 {
+            flags[i] = 0;
         } else {
-            // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
-            let eta = if front { m.param } else { 1.0 / m.param };
-            let cos_i = -d.dot(n);
-            let fr = fresnel_dielectric(cos_i, eta);
-            if uniform(key, 4) < fr {
-                new_d = d + n * (2.0 * cos_i);
-                thr = thr * m.color;
-                new_o = offset_origin(p, n);
+            let pixel = st.x;
+            let path = st.y;
+            let bounce = st.z;
+            let key = stream(f.seed, pixel, path, bounce + 1);
+            let h = hits[r];
+            let tri = h.w.to_bits();
+            let d = ray_d[r].truncate();
+            let mut thr = beta[r].truncate();
+            let mut l = radiance[r].truncate();
+            let mut alive = false;
+            let mut new_o = Vec3::ZERO;
+            let mut new_d = Vec3::ZERO;
+            if tri == MISS {
+                l += thr * f.environment;
             } else {
-                let inv = 1.0 / eta;
-                let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
-                new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
-                thr = thr * m.transmittance;
-                new_o = offset_origin(p, -n);
+                let t = tris[tri as usize];
+                let m = materials[t.material as usize];
+                let ng = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
+                let front = ng.dot(d) < 0.0;
+                let two_sided = m.flags & TWO_SIDED != 0;
+                let n = if front { ng } else { -ng };
+                let p = ray_o[r].truncate() + d * h.x;
+                if m.flags & EMITTER != 0 && (front || two_sided) {
+                    l += thr * m.emission;
+                }
+                let u = Vec2::new(uniform(key, 2), uniform(key, 3));
+                if m.kind == DIFFUSE {
+                    if (front || two_sided) && m.color.max_element() > 0.0 {
+                        let s = S::sample(n, u, shared_patch, f.patches_n);
+                        new_d = s.truncate();
+                        thr = thr * m.color * s.w;
+                        new_o = offset_origin(p, n);
+                        alive = true;
+                    }
+                } else if m.kind == CONDUCTOR {
+                    new_d = d - n * (2.0 * d.dot(n));
+                    thr = thr * m.color;
+                    new_o = offset_origin(p, n);
+                    alive = true;
+                } else if m.kind == ROUGH_CONDUCTOR {
+                    let fr = crate::sampling::frame(n);
+                    let wo = fr.transpose() * -d;
+                    // VNDF sampling maps the unit square onto the visible normals preserving
+                    // measure, so a shared cell of the square keeps each ray's pdf unchanged.
+                    let mut ug = u;
+                    if f.coherent_glossy != 0 {
+                        ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
+                    }
+                    let mn = ggx_vndf(wo, m.param, ug);
+                    let wi = mn * (2.0 * wo.dot(mn)) - wo;
+                    if wi.z > 0.0 {
+                        new_d = fr * wi;
+                        thr = thr * m.color * smith_g1(wi.z, m.param);
+                        new_o = offset_origin(p, n);
+                        alive = true;
+                    }
+                } else {
+                    // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
+                    let eta = if front { m.param } else { 1.0 / m.param };
+                    let cos_i = -d.dot(n);
+                    let fr = fresnel_dielectric(cos_i, eta);
+                    if uniform(key, 4) < fr {
+                        new_d = d + n * (2.0 * cos_i);
+                        thr = thr * m.color;
+                        new_o = offset_origin(p, n);
+                    } else {
+                        let inv = 1.0 / eta;
+                        let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
+                        new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
+                        thr = thr * m.transmittance;
+                        new_o = offset_origin(p, -n);
+                    }
+                    alive = true;
+                }
+                if alive && f.max_depth != 0 && bounce + 1 >= f.max_depth {
+                    alive = false;
+                }
+                if alive && bounce + 1 >= f.rr_depth {
+                    let mut rr_u = uniform(key, 5);
+                    if f.group_rr != 0 {
+                        rr_u = shared_rr;
+                    }
+                    if rr_u < f.rr_continue {
+                        thr = thr / f.rr_continue;
+                    } else {
+                        alive = false;
+                    }
+                }
             }
-            alive = true;
-        }
-        if alive && f.max_depth != 0 && bounce + 1 >= f.max_depth {
-            alive = false;
-        }
-        if alive && bounce + 1 >= f.rr_depth {
-            let mut rr_u = uniform(key, 5);
-            if f.group_rr != 0 {
-                rr_u = shared_rr;
-            }
-            if rr_u < f.rr_continue {
-                thr = thr / f.rr_continue;
+            if alive {
+                state[r] = UVec4::new(pixel, path, bounce + 1, 0);
+                ray_o[r] = new_o.extend(0.0);
+                ray_d[r] = new_d.extend(0.0);
+                beta[r] = thr.extend(0.0);
+                radiance[r] = l.extend(0.0);
+                flags[i] = 1;
             } else {
-                alive = false;
+                accum[r] = accum[r] + l.extend(1.0);
+                wg_done[0].fetch_add(1, Ordering::Relaxed);
+                let next = path + 1;
+                let mut done = 0u32;
+                if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
+                    done = DONE;
+                    wg_done[1].fetch_add(1, Ordering::Relaxed);
+                }
+                let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
+                state[r] = UVec4::new(pixel, next, 0, done);
+                ray_o[r] = f.cam_origin.extend(0.0);
+                ray_d[r] = cd.extend(0.0);
+                beta[r] = Vec4::ONE;
+                radiance[r] = Vec4::ZERO;
+                flags[i] = 0;
             }
         }
     }
-    if alive {
-        state[r] = UVec4::new(pixel, path, bounce + 1, 0);
-        ray_o[r] = new_o.extend(0.0);
-        ray_d[r] = new_d.extend(0.0);
-        beta[r] = thr.extend(0.0);
-        radiance[r] = l.extend(0.0);
-        flags[i] = 1;
-    } else {
-        accum[r] = accum[r] + l.extend(1.0);
-        completed[0].fetch_add(1, Ordering::Relaxed);
-        let next = path + 1;
-        let mut done = 0u32;
-        if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
-            done = DONE;
-            completed[1].fetch_add(1, Ordering::Relaxed);
+    workgroup_barrier();
+    if li == 0 {
+        let c = wg_done[0].load(Ordering::Relaxed);
+        if c > 0 {
+            completed[0].fetch_add(c, Ordering::Relaxed);
         }
-        let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
-        state[r] = UVec4::new(pixel, next, 0, done);
-        ray_o[r] = f.cam_origin.extend(0.0);
-        ray_d[r] = cd.extend(0.0);
-        beta[r] = Vec4::ONE;
-        radiance[r] = Vec4::ZERO;
-        flags[i] = 0;
+        let c1 = wg_done[1].load(Ordering::Relaxed);
+        if c1 > 0 {
+            completed[1].fetch_add(c1, Ordering::Relaxed);
+        }
     }
 }
