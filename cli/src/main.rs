@@ -11,6 +11,8 @@ use cohort::runtime::{BackendKind, Device};
 use cohort_render::{output, Algorithm, Budget, InPatch, RenderOptions, Renderer};
 use cohort_scenes::embedded;
 
+mod figures;
+
 #[derive(Parser)]
 #[command(name = "cohort", version, about = "Coherent-ray wavefront path tracer written in the Cohort GPU kernel language")]
 struct Cli {
@@ -24,6 +26,8 @@ enum Command {
     Render(RenderArgs),
     /// List the embedded scenes.
     Scenes,
+    /// Run the paper's experiments (Figs. 4, 5, 7): a CSV and plots (docs/FIGURES.md).
+    Figures(figures::FiguresArgs),
 }
 
 #[derive(clap::Args)]
@@ -41,7 +45,9 @@ struct RenderArgs {
     /// N: the hemisphere is split into N x 4N patches for coherent sampling (1..=1000).
     #[arg(long, default_value_t = 64)]
     n: u32,
-    /// How a ray samples inside its group's patch: `uniform` (the paper) or `cosine`.
+    /// How a ray samples inside its group's patch: `uniform` (the paper), `cosine`
+    /// (cosine-weighted inside the patch) or `equal-area` (equal-area patches through the
+    /// Shirley–Chiu concentric map).
     #[arg(long, default_value = "uniform")]
     in_patch: String,
     /// Russian roulette per `path` or one draw per `group` (the paper's `_rr`).
@@ -50,6 +56,9 @@ struct RenderArgs {
     /// Interleaved sampling factor D (odd): pixel coordinates are multiplied by D.
     #[arg(long, default_value_t = 1)]
     interleave: u32,
+    /// Glossy (GGX) bounces also sample coherently, sharing a cell of the VNDF domain.
+    #[arg(long)]
+    coherent_glossy: bool,
     /// Image width (default: the scene's film).
     #[arg(long)]
     width: Option<u32>,
@@ -91,6 +100,7 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Render(a) => render(a),
+        Command::Figures(a) => figures::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -121,7 +131,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let in_patch = match a.in_patch.as_str() {
         "uniform" => InPatch::Uniform,
         "cosine" => InPatch::Cosine,
-        other => return Err(format!("unknown --in-patch `{other}` (uniform or cosine)")),
+        "equal-area" => InPatch::EqualArea,
+        other => return Err(format!("unknown --in-patch `{other}` (uniform, cosine or equal-area)")),
     };
     let group_rr = match a.rr.as_str() {
         "path" => false,
@@ -152,6 +163,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         patches_n: a.n,
         group_rr,
         interleave: a.interleave,
+        coherent_glossy: a.coherent_glossy,
         budget,
         seed: a.seed,
         size,

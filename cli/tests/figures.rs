@@ -1,0 +1,171 @@
+//! `cohort figures` end to end on a tiny sweep: the CSV's rows and columns, the plots, the
+//! cached reference, and clear errors for bad lists.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn cohort() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_cohort"))
+}
+
+fn has_gpu() -> bool {
+    cohort::runtime::Device::for_tests(cohort::runtime::BackendKind::Vulkan).is_some()
+}
+
+fn tempdir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "cohort-figures-{}-{}",
+        std::process::id(),
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos()
+    ));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const TINY: &[&str] = &[
+    "figures", "--scenes", "cornell", "--configs", "normal,warp,grid", "--n", "4,16", "--time", "0.05",
+    "--reference-time", "0.2", "--width", "32", "--height", "32", "--backend", "vulkan",
+];
+
+fn parse_csv(text: &str) -> (Vec<String>, Vec<HashMap<String, String>>) {
+    // The device name may be quoted (it can hold commas); no other field is.
+    let split = |line: &str| -> Vec<String> {
+        let mut fields = Vec::new();
+        let (mut cur, mut quoted) = (String::new(), false);
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+                c => cur.push(c),
+            }
+        }
+        fields.push(cur);
+        fields
+    };
+    let mut lines = text.lines();
+    let header = split(lines.next().expect("header"));
+    let rows = lines
+        .map(|l| {
+            let f = split(l);
+            assert_eq!(f.len(), header.len(), "row has {} fields, header {}: {l}", f.len(), header.len());
+            header.iter().cloned().zip(f).collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn num(row: &HashMap<String, String>, key: &str) -> f64 {
+    row[key].parse::<f64>().unwrap_or_else(|_| panic!("{key} = `{}` is not a number in {row:?}", row[key]))
+}
+
+fn assert_image(path: &Path, magic: &[u8]) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(bytes.len() > 5_000, "{} is only {} bytes", path.display(), bytes.len());
+    assert!(bytes.windows(magic.len()).take(64).any(|w| w == magic), "{} lacks {magic:?}", path.display());
+}
+
+#[test]
+fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    let out = cohort().args(TINY).arg("--out-dir").arg(&dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+
+    let (header, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
+    for col in [
+        "scene", "config", "n", "rr", "compaction", "interleave", "paths_per_pixel", "paths_per_s", "rays_per_s",
+        "kernel_ms_traverse", "kernel_ms_extend", "kernel_ms_compact", "rms_percent", "rms_abs", "paths_per_s_vs_normal",
+    ] {
+        assert!(header.iter().any(|h| h == col), "missing column {col} in {header:?}");
+    }
+    // D in {1, 5} x 3 columns x (normal + 2 configs x 2 N).
+    assert_eq!(rows.len(), 2 * 3 * (1 + 2 * 2), "{rows:#?}");
+    for d in ["1", "5"] {
+        for (rr, compaction) in [("path", "true"), ("group", "true"), ("group", "false")] {
+            let sel: Vec<_> = rows.iter().filter(|r| r["interleave"] == d && r["rr"] == rr && r["compaction"] == compaction).collect();
+            assert_eq!(sel.len(), 5, "D={d} rr={rr} compaction={compaction}");
+            let normal: Vec<_> = sel.iter().filter(|r| r["config"] == "normal").collect();
+            assert_eq!(normal.len(), 1);
+            assert_eq!(normal[0]["n"], "", "normal does not depend on N");
+            assert_eq!(num(normal[0], "paths_per_s_vs_normal"), 1.0);
+            for config in ["warp", "grid"] {
+                let mut ns: Vec<_> = sel.iter().filter(|r| r["config"] == config).map(|r| r["n"].clone()).collect();
+                ns.sort();
+                assert_eq!(ns, ["16", "4"], "{config}");
+            }
+            if compaction == "false" {
+                assert!(sel.iter().all(|r| num(r, "kernel_ms_compact") == 0.0), "no compaction ran");
+            }
+        }
+    }
+    for r in &rows {
+        assert_eq!(r["scene"], "cornell");
+        assert_eq!((num(r, "width"), num(r, "height")), (32.0, 32.0));
+        for key in ["paths_per_pixel", "paths_per_s", "rays_per_s", "kernel_ms_traverse", "kernel_ms_extend", "kernel_ms_total", "paths_per_s_vs_normal"] {
+            let v = num(r, key);
+            assert!(v.is_finite() && v > 0.0, "{key} = {v} in {r:?}");
+        }
+        let rms = num(r, "rms_percent");
+        assert!(rms.is_finite() && rms > 0.0 && rms < 1000.0, "rms {rms} in {r:?}");
+        assert!(num(r, "kernel_ms_total") >= 50.0, "the 0.05 s budget was spent: {r:?}");
+    }
+
+    for stem in ["fig4_cornell", "fig5_cornell", "fig7_cornell_d5"] {
+        assert_image(&dir.join(format!("{stem}.png")), b"PNG");
+        assert_image(&dir.join(format!("{stem}.svg")), b"<svg");
+        let svg = std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap();
+        for text in ["warp", "grid", "normal", "N (hemisphere"] {
+            assert!(svg.contains(text), "{stem}.svg lacks `{text}`");
+        }
+    }
+    // No temporary files are left behind.
+    let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+
+    // A second (smaller) run reuses the cached reference instead of rendering it again.
+    let reference = dir.join("reference_cornell_32x32.exr");
+    let before = std::fs::metadata(&reference).unwrap().modified().unwrap();
+    let out = cohort()
+        .args(["figures", "--scenes", "cornell", "--configs", "normal", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32", "--backend", "vulkan", "--interleave", "none"])
+        .arg("--out-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("reusing the reference"), "{stderr}");
+    assert_eq!(std::fs::metadata(&reference).unwrap().modified().unwrap(), before, "the reference was rewritten");
+    let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
+    assert_eq!(rows.len(), 3, "normal once per column");
+    assert!(rows.iter().all(|r| num(r, "rms_percent").is_finite()));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_lists_fail_naming_the_value() {
+    let dir = tempdir();
+    for (args, needle) in [
+        (vec!["--scenes", "cornell,nowhere"], "nowhere"),
+        (vec!["--configs", "normal,bogus"], "bogus"),
+        (vec!["--configs", "block_100"], "block_100"),
+        (vec!["--n", "4,abc"], "abc"),
+        (vec!["--n", "4,0"], "`0`"),
+        (vec!["--n", "4,2000"], "2000"),
+        (vec!["--n", "4,,8"], "4,,8"),
+        (vec!["--n", "8,8"], "`8`"),
+        (vec!["--interleave", "4"], "`4`"),
+        (vec!["--time", "0"], "--time"),
+    ] {
+        let out = cohort().arg("figures").args(&args).arg("--out-dir").arg(&dir).output().unwrap();
+        assert!(!out.status.success(), "{args:?} should fail");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("error") && err.contains(needle), "{args:?}: {err}");
+    }
+    // Nothing was rendered or written.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
