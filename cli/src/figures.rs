@@ -156,7 +156,10 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
     let mut written = Vec::new();
     for spec in &plan.scenes {
         let scene = crate::load_scene(&spec.arg)?;
-        let (w, h) = (plan.width.unwrap_or(scene.camera.width), plan.height.unwrap_or(scene.camera.height));
+        // The BVH is built and uploaded once per scene, not once per point.
+        let gpu = cohort_render::GpuScene::prepare(&device, &scene).map_err(|e| format!("{}: {e}", spec.label))?;
+        let scene: Prepared = (scene, gpu);
+        let (w, h) = (plan.width.unwrap_or(scene.0.camera.width), plan.height.unwrap_or(scene.0.camera.height));
         for &d in &plan.interleaves {
             if gcd(d, w) != 1 || gcd(d, h) != 1 {
                 return Err(format!("bad --interleave value `{d}`: it must be coprime with the image size {w}x{h} of scene `{}`", spec.arg));
@@ -336,8 +339,11 @@ fn file_label(path: &str) -> String {
     raw.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }
 
-fn render(device: &Device, scene: &cohort_scenes::Scene, opts: RenderOptions, bar: &indicatif::ProgressBar, index: u64) -> Result<(Image, RenderStats), String> {
-    let mut renderer = Renderer::new(device, scene, opts).map_err(|e| e.to_string())?;
+/// A scene with its BVH already on the device.
+type Prepared = (cohort_scenes::Scene, std::sync::Arc<cohort_render::GpuScene>);
+
+fn render(device: &Device, scene: &Prepared, opts: RenderOptions, bar: &indicatif::ProgressBar, index: u64) -> Result<(Image, RenderStats), String> {
+    let mut renderer = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| e.to_string())?;
     renderer
         .render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64))
         .map_err(|e| e.to_string())
@@ -352,7 +358,7 @@ fn reference_seed(seed: u32) -> u32 {
 #[allow(clippy::too_many_arguments)]
 fn reference_image(
     device: &Device,
-    scene: &cohort_scenes::Scene,
+    scene: &Prepared,
     spec: &SceneSpec,
     (w, h): (u32, u32),
     plan: &Plan,

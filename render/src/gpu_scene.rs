@@ -13,6 +13,12 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Builds the BVH of `scene` and uploads everything the kernels read.
+    pub fn prepare(device: &Device, scene: &Scene) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
+        let bvh = GpuBvh::build(scene).map_err(|e| crate::RenderError::Bvh(e.to_string()))?;
+        Ok(std::sync::Arc::new(GpuScene::upload(device, scene, &bvh)?))
+    }
+
     pub fn upload(device: &Device, scene: &Scene, bvh: &GpuBvh) -> Result<GpuScene, RuntimeError> {
         let nodes: &[BvhNode] = bytemuck::cast_slice(&bvh.nodes);
         let tris: &[Triangle] = bytemuck::cast_slice(&bvh.triangles);

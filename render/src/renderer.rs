@@ -11,7 +11,7 @@ use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
 use cohort_kernels::traverse::traverse;
-use cohort_scenes::{morton_pixel_order, GpuBvh, Scene};
+use cohort_scenes::{morton_pixel_order, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
 use crate::{GpuScene, Image};
@@ -175,7 +175,7 @@ struct Paths {
 
 pub struct Renderer<'d> {
     device: &'d Device,
-    scene: GpuScene,
+    scene: std::sync::Arc<GpuScene>,
     frame: Frame,
     paths: Paths,
     slot_to_pixel: Vec<u32>,
@@ -188,6 +188,13 @@ fn ns(s: &DispatchStats) -> Duration {
 
 impl<'d> Renderer<'d> {
     pub fn new(device: &'d Device, scene: &Scene, opts: RenderOptions) -> Result<Self, RenderError> {
+        let gpu = GpuScene::prepare(device, scene)?;
+        Self::with_scene(device, scene, gpu, opts)
+    }
+
+    /// A renderer over a scene already on the device (built once with
+    /// `GpuScene::prepare`, shared by many renders, e.g. the points of a sweep).
+    pub fn with_scene(device: &'d Device, scene: &Scene, gpu: std::sync::Arc<GpuScene>, opts: RenderOptions) -> Result<Self, RenderError> {
         let mut camera = scene.camera.clone();
         if let Some((w, h)) = opts.size {
             if w == 0 || h == 0 {
@@ -213,8 +220,6 @@ impl<'d> Renderer<'d> {
                 opts.interleave
             )));
         }
-        let bvh = GpuBvh::build(scene).map_err(|e| RenderError::Bvh(e.to_string()))?;
-        let gpu = GpuScene::upload(device, scene, &bvh)?;
         let f = camera.frame();
         let paths_per_pixel = match opts.budget {
             Budget::PathsPerPixel(p) => p,
