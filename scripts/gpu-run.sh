@@ -10,9 +10,9 @@ export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export CI=true COHORT_VK_VALIDATION=0
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv | tee "$OUT/gpu.txt"
 {
-for t in difftest random_kernels traversal runtime_dispatch runtime_errors; do
+for t in difftest random_kernels traversal render runtime_dispatch runtime_errors; do
   [ -x "$B/$t" ] || continue
-  echo "== $t"; (cd tests && ../$B/$t --test-threads 1 2>&1 | tail -4)
+  echo "== $t"; (cd tests && ../$B/$t --test-threads 1 2>&1 | grep -E "^test |panicked|differ|test result" | tail -12)
 done
 } 2>&1 | tee "$OUT/tests.log"
 echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tail -3
