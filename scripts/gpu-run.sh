@@ -12,7 +12,9 @@ nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv | t
 {
 for t in difftest random_kernels traversal render runtime_dispatch runtime_errors; do
   [ -x "$B/$t" ] || continue
-  echo "== $t"; (cd tests && ../$B/$t --test-threads 1 2>&1 | grep -E "^test |panicked|differ|test result" | tail -12)
+  # The shared scenes do not travel to the GPU machine: run the render tests that need none.
+  filter=""; [ "$t" = render ] && filter="backends_agree white_furnace"
+  echo "== $t"; (cd tests && ../$B/$t --test-threads 1 $filter 2>&1 | grep -E "^test |panicked|differ|test result" | tail -12)
 done
 } 2>&1 | tee "$OUT/tests.log"
 echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tail -3
