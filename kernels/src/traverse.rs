@@ -39,11 +39,13 @@ pub fn intersect(org: Vec3, px: Vec3, py: Vec3, pz: Vec3, shear: Vec3, v0: Vec3,
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
     let mut result = Vec4::ZERO;
-    let mixed = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+    // `|` and `&` rather than `||` and `&&`: all operands are cheap and safe to evaluate,
+    // and non-short-circuit logic compiles to straight-line code in the innermost loop.
+    let mixed = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
     let det = u + v + w;
-    if !mixed && det != 0.0 {
+    if !mixed & (det != 0.0) {
         let t = (u * (shear.z * az0) + v * (shear.z * bz0) + w * (shear.z * cz0)) / det;
-        if t > tmin && t < tmax {
+        if (t > tmin) & (t < tmax) {
             result = Vec4::new(t, v / det, w / det, 1.0);
         }
     }
@@ -55,7 +57,7 @@ pub fn intersect(org: Vec3, px: Vec3, py: Vec3, pz: Vec3, shear: Vec3, v0: Vec3,
 pub fn dominant_axis(dir: Vec3) -> u32 {
     let ad = dir.abs();
     let mut kz = 2u32;
-    if ad.x >= ad.y && ad.x >= ad.z {
+    if (ad.x >= ad.y) & (ad.x >= ad.z) {
         kz = 0;
     } else if ad.y >= ad.z {
         kz = 1;
@@ -127,7 +129,7 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
                 }
             }
         }
-        if next_a != 0xffff_ffff && next_b != 0xffff_ffff {
+        if (next_a != 0xffff_ffff) & (next_b != 0xffff_ffff) {
             if tb < ta {
                 let tmp = next_a;
                 next_a = next_b;
