@@ -8,8 +8,7 @@
 //! `cargo run --release -p cohort-render --example kernel_bench -- [scene] [backend]`
 
 use cohort::runtime::{BackendKind, Device, DispatchStats};
-use cohort::Grid;
-use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
+use cohort_kernels::compact;
 use cohort_kernels::copy::copy_u32;
 use cohort_kernels::layout::{BvhNode, Frame, Triangle, MISS};
 use cohort_kernels::traverse::{traverse, traverse_persistent};
@@ -140,22 +139,23 @@ fn main() {
     let idr = d.upload(&(0..m).collect::<Vec<u32>>()).unwrap();
     let out = d.alloc::<u32>(m as usize).unwrap();
     let mcount = d.upload(&[m]).unwrap();
-    let sums = d.alloc::<u32>((m as usize).div_ceil(256)).unwrap();
+    let scratch = d.alloc::<u32>(compact::scratch_len(m as usize)).unwrap();
     let total = d.alloc::<u32>(1).unwrap();
-    let (sc, so, ss) = (compact_count::spec(&d, None), compact_offsets::spec(&d, None), compact_scatter::spec(&d, None));
+    let cspecs = compact::specs(&d);
     let mut b = d.batch();
     for _ in 0..reps {
-        compact_count::record(&mut b, &sc, m, &mcount, &flags, &sums).unwrap();
-        compact_offsets::record(&mut b, &so, Grid::Groups([1, 1, 1]), &mcount, &sums, &total).unwrap();
-        compact_scatter::record(&mut b, &ss, m, &mcount, &flags, &sums, &total, &idr, &out).unwrap();
+        compact::record(&mut b, &cspecs, m, &mcount, &flags, &scratch, &total, &idr, &out).unwrap();
     }
     let st = b.submit().unwrap();
-    let per: Vec<f64> = st.chunks(3).map(|c| c.iter().map(ns).sum()).collect();
+    let k = compact::DISPATCHES;
+    let per: Vec<f64> = st.chunks(k).map(|c| c.iter().map(ns).sum()).collect();
     let t_compact = median(per);
-    let parts: Vec<f64> = (0..3).map(|k| median(st.iter().skip(k).step_by(3).map(ns).collect())).collect();
+    let parts: Vec<f64> = (0..k).map(|i| median(st.iter().skip(i).step_by(k).map(ns).collect())).collect();
     let got = d.read(&out).unwrap();
     let alive = flags_host.iter().filter(|&&f| f == 1).count();
     assert!(got[..alive].windows(2).all(|w| w[0] < w[1]) && got[alive..].windows(2).all(|w| w[0] < w[1]), "compaction is not a stable partition");
+    assert!(got[..alive].iter().all(|&i| flags_host[i as usize] == 1), "compaction put a flag-0 id among the flag-1 ones");
+    assert_eq!(d.read(&total).unwrap()[0] as usize, alive, "compaction total");
     let cspec = copy_u32::spec(&d, None);
     let mut b = d.batch();
     for _ in 0..reps {

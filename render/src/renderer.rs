@@ -5,8 +5,8 @@
 use std::time::{Duration, Instant};
 
 use cohort::runtime::{Device, DispatchStats, GpuBuffer, RuntimeError};
-use cohort::{Grid, Group};
-use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter, BLOCK};
+use cohort::Group;
+use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
@@ -256,7 +256,7 @@ impl<'d> Renderer<'d> {
                 ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
             })
             .collect();
-        let blocks = n.div_ceil(BLOCK as usize);
+        let blocks = compact::scratch_len(n);
         let paths = Paths {
             slot_pixel: device.upload(&slot_to_pixel)?,
             idrays: [device.alloc(n)?, device.alloc(n)?],
@@ -304,9 +304,7 @@ impl<'d> Renderer<'d> {
         let spec_init = init_paths::spec(d, None);
         let spec_t = traverse::spec(d, None);
         let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
-        let spec_cc = compact_count::spec(d, None);
-        let spec_co = compact_offsets::spec(d, None);
-        let spec_cs = compact_scatter::spec(d, None);
+        let spec_c = compact::specs(d);
         init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
         let mut stats = RenderStats { pixels: n as u64, ..Default::default() };
         let mut cur = 0usize;
@@ -320,9 +318,7 @@ impl<'d> Renderer<'d> {
                 &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum, &p.flags, &p.counters,
             )?;
             if self.opts.compact {
-                compact_count::record(&mut b, &spec_cc, n, &p.count, &p.flags, &p.block_sums)?;
-                compact_offsets::record(&mut b, &spec_co, Grid::Groups([1, 1, 1]), &p.count, &p.block_sums, &p.total)?;
-                compact_scatter::record(&mut b, &spec_cs, n, &p.count, &p.flags, &p.block_sums, &p.total, &p.idrays[cur], &p.idrays[1 - cur])?;
+                compact::record(&mut b, &spec_c, n, &p.count, &p.flags, &p.block_sums, &p.total, &p.idrays[cur], &p.idrays[1 - cur])?;
             }
             let times = b.submit()?;
             if self.opts.compact {
