@@ -74,6 +74,11 @@ pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
         // that spirv-val rejects.
         lang_version: (1, 3),
         flags: naga::back::spv::WriterFlags::empty(),
+        // Workgroup memory is zeroed by the driver (Vulkan 1.3 / the zero-initialize
+        // extension, which the runtime enables), as WGSL promises, instead of naga's
+        // polyfill: a store of every array by invocation 0 plus a barrier in every
+        // kernel, which made a 16 KiB workgroup array cost seconds on lavapipe.
+        zero_initialize_workgroup_memory: naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Native,
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
