@@ -343,7 +343,14 @@ fn file_label(path: &str) -> String {
 type Prepared = (cohort_scenes::Scene, std::sync::Arc<cohort_render::GpuScene>);
 
 fn render(device: &Device, scene: &Prepared, opts: RenderOptions, bar: &indicatif::ProgressBar, index: u64) -> Result<(Image, RenderStats), String> {
+    let budget = opts.budget;
     let mut renderer = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| e.to_string())?;
+    // An unmeasured burst right before the measured render: between points the host
+    // works and the GPU idles, and the driver lowers its clocks (seen on the H200, down
+    // to 345 MHz); the burst brings them back so every point is measured alike.
+    renderer.set_budget(cohort_render::Budget::KernelTime(std::time::Duration::from_millis(60)));
+    renderer.render(|_, _| {}).map_err(|e| e.to_string())?;
+    renderer.set_budget(budget);
     renderer
         .render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64))
         .map_err(|e| e.to_string())

@@ -276,6 +276,15 @@ impl<'d> Renderer<'d> {
         Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts })
     }
 
+    /// Changes the budget of the next `render` (e.g. a short unmeasured warm-up first).
+    pub fn set_budget(&mut self, budget: Budget) {
+        self.frame.paths_per_pixel = match budget {
+            Budget::PathsPerPixel(p) => p,
+            Budget::KernelTime(_) => 0,
+        };
+        self.opts.budget = budget;
+    }
+
     pub fn size(&self) -> (u32, u32) {
         (self.frame.width, self.frame.height)
     }
@@ -306,6 +315,8 @@ impl<'d> Renderer<'d> {
         let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
         let spec_c = compact::specs(d);
         init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
+        // A renderer can render again (each render starts from scratch).
+        d.write(&p.counters, 0, &[0, 0])?;
         let mut stats = RenderStats { pixels: n as u64, ..Default::default() };
         let mut cur = 0usize;
         let mut live = n as u64;
