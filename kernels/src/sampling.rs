@@ -68,6 +68,26 @@ pub fn cosine_patch(key: u32, patches_n: u32) -> u32 {
     i * m + j
 }
 
+/// Bounds of patch `patch` of the N x 4N split: cos of its lower and upper polar angle
+/// (x = cos(i dT), y = cos((i+1) dT)) and, in z, the azimuth at fraction `v` of its
+/// azimuth band.
+#[kernel_fn]
+pub fn patch_bounds(patch: u32, patches_n: u32, v: f32) -> Vec3 {
+    let m = 4 * patches_n;
+    let i = patch / m;
+    let j = patch % m;
+    let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
+    let dp = 2.0 * core::f32::consts::PI / m as f32;
+    Vec3::new((i as f32 * dt).cos(), ((i + 1) as f32 * dt).cos(), (j as f32 + v) * dp)
+}
+
+/// Local direction (z up) with polar cosine `cos_t` and azimuth `phi`.
+#[kernel_fn]
+pub fn polar_dir(cos_t: f32, phi: f32) -> Vec3 {
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+}
+
 /// The paper's coherent sampler: the group shares a patch; each ray draws its direction
 /// uniformly by solid angle inside it, in its own tangent frame, weighted by its exact
 /// pdf P(i,j)/A(i,j).
@@ -79,18 +99,11 @@ impl DiffuseSampler for CoherentUniform {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let m = 4 * patches_n;
-        let i = group_value / m;
-        let j = group_value % m;
-        let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
-        let dp = 2.0 * core::f32::consts::PI / m as f32;
-        let c0 = (i as f32 * dt).cos();
-        let c1 = ((i + 1) as f32 * dt).cos();
+        let b = patch_bounds(group_value, patches_n, u.y);
+        let c0 = b.x;
+        let c1 = b.y;
         let cos_t = c0 - u.x * (c0 - c1);
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let phi = (j as f32 + u.y) * dp;
-        let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
-        let d = frame(n) * local;
+        let d = frame(n) * polar_dir(cos_t, b.z);
         // f cos / pdf over the albedo: (cos / pi) / (P / A), P = dp/2pi (c0^2 - c1^2),
         // A = dp (c0 - c1), so P / A = (c0 + c1) / 2pi and the factor is 2 cos / (c0 + c1).
         let w = 2.0 * cos_t / (c0 + c1);
@@ -108,20 +121,12 @@ impl DiffuseSampler for CoherentCosine {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let m = 4 * patches_n;
-        let i = group_value / m;
-        let j = group_value % m;
-        let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
-        let dp = 2.0 * core::f32::consts::PI / m as f32;
-        let c0 = (i as f32 * dt).cos();
-        let c1 = ((i + 1) as f32 * dt).cos();
+        let b = patch_bounds(group_value, patches_n, u.y);
+        let c0 = b.x;
+        let c1 = b.y;
         // cos^2 uniform in [c1^2, c0^2] gives density proportional to cos inside the band.
         let cos2 = c0 * c0 - u.x * (c0 * c0 - c1 * c1);
-        let cos_t = cos2.max(0.0).sqrt();
-        let sin_t = (1.0 - cos2).max(0.0).sqrt();
-        let phi = (j as f32 + u.y) * dp;
-        let local = Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
-        let d = frame(n) * local;
+        let d = frame(n) * polar_dir(cos2.max(0.0).sqrt(), b.z);
         Vec4::new(d.x, d.y, d.z, 1.0)
     }
 }
