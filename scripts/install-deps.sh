@@ -5,7 +5,6 @@
 set -euo pipefail
 need=()
 ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || need+=(libvulkan1)
-if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1; then need+=(mesa-vulkan-drivers); fi
 ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1 || [ -n "${COHORT_NO_LAVAPIPE:-}" ] || need+=(mesa-vulkan-drivers)
 command -v spirv-val >/dev/null || need+=(spirv-tools)
 [ -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] || need+=(vulkan-validationlayers)
