@@ -50,9 +50,15 @@ struct RenderArgs {
     /// Shirley–Chiu concentric map).
     #[arg(long, default_value = "uniform")]
     in_patch: String,
-    /// Russian roulette per `path` or one draw per `group` (the paper's `_rr`).
+    /// Russian roulette per `path`, one draw per `group` (the paper's `_rr`), or `whole`:
+    /// group roulette plus whole-group termination (when any path of a group ends, the
+    /// others play one shared roulette with continuation --end-continue; warp and block
+    /// groups only).
     #[arg(long, default_value = "path")]
     rr: String,
+    /// Continuation probability of the whole-group-end roulette (`--rr whole`), in (0, 1].
+    #[arg(long, default_value_t = 0.5)]
+    end_continue: f32,
     /// Interleaved sampling factor D (odd): pixel coordinates are multiplied by D.
     #[arg(long, default_value_t = 1)]
     interleave: u32,
@@ -134,10 +140,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
         "equal-area" => InPatch::EqualArea,
         other => return Err(format!("unknown --in-patch `{other}` (uniform, cosine or equal-area)")),
     };
-    let group_rr = match a.rr.as_str() {
-        "path" => false,
-        "group" => true,
-        other => return Err(format!("unknown --rr `{other}` (path or group)")),
+    let (group_rr, whole_group_end) = match a.rr.as_str() {
+        "path" => (false, None),
+        "group" => (true, None),
+        "whole" => (true, Some(a.end_continue)),
+        other => return Err(format!("unknown --rr `{other}` (path, group or whole)")),
     };
     let budget = match (a.paths, a.time) {
         (_, Some(t)) if !(t > 0.0 && t.is_finite()) => return Err(format!("--time {t} must be a positive number of seconds")),
@@ -168,6 +175,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         seed: a.seed,
         size,
         compact: !a.no_compact,
+        whole_group_end,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&device, &scene, opts).map_err(|e| e.to_string())?;
@@ -194,7 +202,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let config = format!(
         "{}{}{}, N = {}, in-patch {}, D = {}",
         algorithm.name(),
-        if group_rr { "_rr" } else { "" },
+        match (group_rr, whole_group_end) {
+            (_, Some(q)) => format!("_rr, whole-group end (q = {q})"),
+            (true, None) => "_rr".into(),
+            (false, None) => String::new(),
+        },
         if a.no_compact { " (NO)" } else { "" },
         a.n,
         a.in_patch,
@@ -212,7 +224,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
-            "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "interleave": a.interleave,
+            "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
             "compaction": !a.no_compact, "seed": a.seed,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,

@@ -58,6 +58,9 @@ fn bad_input_fails_clearly_and_keeps_existing_outputs() {
         vec!["render".to_string(), "--paths".into(), "0".into()],
         vec!["render".to_string(), "--algorithm".into(), "bogus".into()],
         vec!["render".to_string(), "--backend".into(), "metal".into()],
+        vec!["render".to_string(), "--rr".into(), "sometimes".into()],
+        vec!["render".to_string(), "--algorithm".into(), "grid".into(), "--rr".into(), "whole".into()],
+        vec!["render".to_string(), "--algorithm".into(), "warp".into(), "--rr".into(), "whole".into(), "--end-continue".into(), "0".into()],
     ] {
         let out = cohort().args(&args).arg("--png").arg(&png).arg("--out").arg(dir.join("x.exr")).output().unwrap();
         assert!(!out.status.success(), "{args:?} should fail");
@@ -69,6 +72,28 @@ fn bad_input_fails_clearly_and_keeps_existing_outputs() {
     let out = cohort().args(["render", "--scene"]).arg(&bad_xml).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.xml") && err.contains(":3"), "{err}");
+}
+
+/// Whole-group termination is reachable from the command line and recorded in the stats.
+#[test]
+fn renders_with_whole_group_termination() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    let stats = dir.join("w.json");
+    let out = cohort()
+        .args(["render", "--width", "32", "--height", "32", "--paths", "2", "--backend", "vulkan", "--algorithm", "warp", "--rr", "whole"])
+        .args(["--end-continue", "0.25", "--n", "8"])
+        .arg("--out").arg(dir.join("w.exr")).arg("--png").arg(dir.join("w.png")).arg("--stats").arg(&stats)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("whole-group end (q = 0.25)"));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["whole_group_end"], 0.25);
+    assert_eq!(json["group_rr"], true);
+    assert_eq!(json["paths_per_pixel"], 2.0);
 }
 
 fn tempdir() -> std::path::PathBuf {

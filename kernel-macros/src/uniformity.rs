@@ -19,7 +19,7 @@ use std::collections::{HashMap, HashSet};
 use syn::{Block, Expr, Pat, Stmt};
 
 const UNIFORM_BUILTINS: &[&str] = &["workgroup_id", "num_workgroups", "workgroup_index", "workgroup_size", "subgroup_size", "num_subgroups"];
-const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share", "workgroup_uniform_load"];
+const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share", "group_any", "workgroup_uniform_load"];
 
 const STARTS_HERE: &str = "the non-uniform control flow starts here";
 const AND_NOTE: &str = "the non-uniform control flow starts here: the right side of `&&` runs only for the invocations where this is true";

@@ -8,6 +8,7 @@
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
 use crate::layout::*;
+use crate::path_end::PathEnd;
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{cell_point, fresnel_dielectric, ggx_vndf, smith_g1, DiffuseSampler};
 use cohort::prelude::*;
@@ -60,7 +61,7 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 }
 
 #[kernel(workgroup = 64)]
-pub fn extend<S: DiffuseSampler>(
+pub fn extend<S: DiffuseSampler, E: PathEnd>(
     #[builtin(global_index)] gi: u32,
     #[builtin(local_index)] li: u32,
     #[workgroup] wg_done: &mut [AtomicU32; 2],
@@ -82,7 +83,11 @@ pub fn extend<S: DiffuseSampler>(
     // The group's shared draws come first, in uniform control flow: the patch of
     // coherent sampling and the group's Russian-roulette number.
     let shared_patch = group_share(|group| S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n));
-    let shared_rr = group_share(|group| uniform(stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11), 0));
+    // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
+    let shared_rr = group_share(|group| {
+        let k = stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11);
+        Vec2::new(uniform(k, 0), uniform(k, 1))
+    });
     let shared_cell = group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
     // Completed paths are counted per workgroup and added to the global counters once
     // per workgroup: one global atomic per path serialised on a single address.
@@ -91,25 +96,35 @@ pub fn extend<S: DiffuseSampler>(
         wg_done[1].store(0, Ordering::Relaxed);
     }
     workgroup_barrier();
+    // Phase 1: shade and decide per path. What phase 2 needs outlives the branch, because
+    // the group may vote in between, which every invocation must reach.
+    let i = gi as usize;
+    let mut r = 0usize;
+    let mut active = false;
+    let mut alive = false;
+    let mut pixel = 0u32;
+    let mut path = 0u32;
+    let mut bounce = 0u32;
+    let mut thr = Vec3::ZERO;
+    let mut l = Vec3::ZERO;
+    let mut new_o = Vec3::ZERO;
+    let mut new_d = Vec3::ZERO;
     if gi < count[0] {
-        let i = gi as usize;
-        let r = idrays[i] as usize;
+        r = idrays[i] as usize;
         let st = state[r];
         if st.w & DONE != 0 {
             flags[i] = 0;
         } else {
-            let pixel = st.x;
-            let path = st.y;
-            let bounce = st.z;
+            active = true;
+            pixel = st.x;
+            path = st.y;
+            bounce = st.z;
             let key = stream(f.seed, pixel, path, bounce + 1);
             let h = hits[r];
             let tri = h.w.to_bits();
             let d = ray_d[r].truncate();
-            let mut thr = beta[r].truncate();
-            let mut l = radiance[r].truncate();
-            let mut alive = false;
-            let mut new_o = Vec3::ZERO;
-            let mut new_d = Vec3::ZERO;
+            thr = beta[r].truncate();
+            l = radiance[r].truncate();
             if tri == MISS {
                 l += thr * f.environment;
             } else {
@@ -178,7 +193,7 @@ pub fn extend<S: DiffuseSampler>(
                 if alive && bounce + 1 >= f.rr_depth {
                     let mut rr_u = uniform(key, 5);
                     if f.group_rr != 0 {
-                        rr_u = shared_rr;
+                        rr_u = shared_rr.x;
                     }
                     if rr_u < f.rr_continue {
                         thr = thr / f.rr_continue;
@@ -187,30 +202,45 @@ pub fn extend<S: DiffuseSampler>(
                     }
                 }
             }
-            if alive {
-                state[r] = UVec4::new(pixel, path, bounce + 1, 0);
-                ray_o[r] = new_o.extend(0.0);
-                ray_d[r] = new_d.extend(0.0);
-                beta[r] = thr.extend(0.0);
-                radiance[r] = l.extend(0.0);
-                flags[i] = 1;
+        }
+    }
+    // Whole-group termination: a path that ended makes its group play a shared roulette.
+    let mut group_ended = false;
+    if E::WHOLE_GROUP {
+        group_ended = group_any(active && !alive);
+    }
+    // Phase 2: continue the path, or add its estimate and regenerate a camera ray.
+    if active {
+        if alive && group_ended {
+            if shared_rr.y < f.group_end_continue {
+                thr = thr / f.group_end_continue;
             } else {
-                accum[r] = accum[r] + l.extend(1.0);
-                wg_done[0].fetch_add(1, Ordering::Relaxed);
-                let next = path + 1;
-                let mut done = 0u32;
-                if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
-                    done = DONE;
-                    wg_done[1].fetch_add(1, Ordering::Relaxed);
-                }
-                let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
-                state[r] = UVec4::new(pixel, next, 0, done);
-                ray_o[r] = f.cam_origin.extend(0.0);
-                ray_d[r] = cd.extend(0.0);
-                beta[r] = Vec4::ONE;
-                radiance[r] = Vec4::ZERO;
-                flags[i] = 0;
+                alive = false;
             }
+        }
+        if alive {
+            state[r] = UVec4::new(pixel, path, bounce + 1, 0);
+            ray_o[r] = new_o.extend(0.0);
+            ray_d[r] = new_d.extend(0.0);
+            beta[r] = thr.extend(0.0);
+            radiance[r] = l.extend(0.0);
+            flags[i] = 1;
+        } else {
+            accum[r] = accum[r] + l.extend(1.0);
+            wg_done[0].fetch_add(1, Ordering::Relaxed);
+            let next = path + 1;
+            let mut done = 0u32;
+            if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
+                done = DONE;
+                wg_done[1].fetch_add(1, Ordering::Relaxed);
+            }
+            let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
+            state[r] = UVec4::new(pixel, next, 0, done);
+            ray_o[r] = f.cam_origin.extend(0.0);
+            ray_d[r] = cd.extend(0.0);
+            beta[r] = Vec4::ONE;
+            radiance[r] = Vec4::ZERO;
+            flags[i] = 0;
         }
     }
     workgroup_barrier();

@@ -86,6 +86,12 @@ pub struct Frame {
     /// 1: glossy (GGX) bounces also sample coherently: the group shares a cell of a
     /// N x N grid over the VNDF's unit-square domain.
     pub coherent_glossy: u32,
+    /// Whole-group termination (`extend::<_, WholeGroup>`): continuation probability of
+    /// the roulette a group plays when one of its paths ends.
+    pub group_end_continue: f32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// `state.w` bits of a ray slot.

@@ -2,8 +2,9 @@
 //! that each is one Rust source that also runs on the host.
 //!
 //! Data flow of one iteration (driven by the `cohort-render` crate):
-//! `traverse` (closest hit of every live ray) → `extend::<S>` (shade, sample the next
-//! direction with strategy `S`, or finish the path and regenerate a camera ray) →
+//! `traverse` (closest hit of every live ray) → `extend::<S, E>` (shade, sample the next
+//! direction with strategy `S`, or finish the path, as policy `E` says, and regenerate a
+//! camera ray) →
 //! `compact_*` (stable partition of `idrays`: extended rays first, regenerated last).
 //! Path state lives in structure-of-arrays buffers indexed by ray slot; slot `g` belongs
 //! to pixel `slot_pixel[g]` (Morton order), and only `idrays` is ever reordered.
@@ -12,6 +13,7 @@ pub mod compact;
 pub mod copy;
 pub mod extend;
 pub mod layout;
+pub mod path_end;
 pub mod rng;
 pub mod sampling;
 pub mod traverse;

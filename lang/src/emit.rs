@@ -10,9 +10,11 @@ use crate::ir::kernel::BuiltKernel;
 use cohort_runtime::{KernelArtifact, KernelFeatures};
 
 /// A kernel that could not be compiled. Type-correct kernel source should never produce
-/// one: it is a compiler bug, reported at the kernel's definition.
+/// one in a later stage than `build`: that is a compiler bug, reported at the kernel's
+/// definition. At stage `build` the kernel asked for something its specialisation cannot
+/// lower (e.g. `group_any` at grid level).
 #[derive(Debug, thiserror::Error)]
-#[error("{file}:{line}:{column}: kernel `{kernel}` ({spec}): {stage}: {message}\n(this is a Cohort compiler bug: the kernel type-checked, so its IR should be valid)")]
+#[error("{file}:{line}:{column}: kernel `{kernel}` ({spec}): {stage}: {message}{}", if *stage == "build" { "" } else { "\n(this is a Cohort compiler bug: the kernel type-checked, so its IR should be valid)" })]
 pub struct CompileError {
     pub kernel: String,
     pub spec: String,
@@ -57,6 +59,9 @@ pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
         stage,
         message,
     };
+    if !built.unsupported.is_empty() {
+        return Err(err("build", built.unsupported.join("; ")));
+    }
     let caps = capabilities(built.uses_subgroups);
     let mut module = built.module.clone();
     validate(&module, caps).map_err(|m| err("validate", m))?;

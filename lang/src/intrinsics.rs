@@ -65,6 +65,21 @@ pub mod group_share {
     }
 }
 
+/// True for every invocation of the kernel's coherence group (its `group` level: one
+/// invocation, a 32-wide warp or a workgroup) when `p` holds for any of them; e.g. a group
+/// that ends together when one of its paths ends. Every invocation of the workgroup must
+/// reach the call (as for barriers). Not available at grid level: a dispatch cannot
+/// exchange values between its workgroups (building such a kernel is a compile error).
+/// On the host every invocation runs alone, so the group is that invocation.
+pub fn group_any(p: bool) -> bool {
+    p
+}
+pub mod group_any {
+    pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
+        crate::ir::group::group_any(p)
+    }
+}
+
 fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
     with(|c| {
         c.uses_subgroups = true;

@@ -9,6 +9,7 @@ use cohort::Group;
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::layout::Frame;
+use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
 use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
 use cohort_kernels::traverse::traverse;
 use cohort_scenes::{morton_pixel_order, Scene};
@@ -86,6 +87,10 @@ pub struct RenderOptions {
     pub compact: bool,
     /// Russian roulette continuation probability (the paper: 0.8).
     pub rr_continue: f32,
+    /// Whole-group termination (beyond the paper): when a path of a group ends, the
+    /// group's other paths play one shared roulette with this continuation probability
+    /// (`cohort_kernels::path_end`). `None`: paths end one by one. Needs warp or block groups.
+    pub whole_group_end: Option<f32>,
 }
 
 impl Default for RenderOptions {
@@ -102,6 +107,7 @@ impl Default for RenderOptions {
             size: None,
             compact: true,
             rr_continue: 0.8,
+            whole_group_end: None,
         }
     }
 }
@@ -220,6 +226,18 @@ impl<'d> Renderer<'d> {
                 opts.interleave
             )));
         }
+        if let Some(q) = opts.whole_group_end {
+            if !(q > 0.0 && q <= 1.0) {
+                return Err(RenderError::Options(format!("whole-group end continuation {q} is not in (0, 1] (0 would cut paths short: biased)")));
+            }
+            if opts.algorithm.group == Group::Grid {
+                return Err(RenderError::Options(
+                    "whole-group termination needs warp or block groups: the grid cannot vote within one dispatch (and with 2^20 paths \
+                     one of them ends at every bounce, so it would only be a group roulette; use --rr group)"
+                        .into(),
+                ));
+            }
+        }
         let f = camera.frame();
         let paths_per_pixel = match opts.budget {
             Budget::PathsPerPixel(p) => p,
@@ -244,6 +262,8 @@ impl<'d> Renderer<'d> {
             patches_n: opts.patches_n,
             group_rr: opts.group_rr as u32,
             coherent_glossy: (opts.coherent_glossy && opts.algorithm.coherent) as u32,
+            group_end_continue: opts.whole_group_end.unwrap_or(0.0),
+            ..Default::default()
         };
         let n = n as usize;
         // Interleaved sampling: slot g renders pixel D * Morton(g) (mod the size), which
@@ -306,6 +326,14 @@ impl<'d> Renderer<'d> {
     }
 
     fn render_with<S: DiffuseSampler>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+        if self.opts.whole_group_end.is_some() {
+            self.render_ended_by::<S, WholeGroup>(progress)
+        } else {
+            self.render_ended_by::<S, EachPath>(progress)
+        }
+    }
+
+    fn render_ended_by<S: DiffuseSampler, E: PathEnd>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
         let d = self.device;
         let p = &self.paths;
         let n = self.frame.slots;
@@ -332,7 +360,7 @@ impl<'d> Renderer<'d> {
             for _ in 0..batch_iterations {
                 self.frame.iteration = stats.iterations;
                 traverse::record(&mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits)?;
-                extend::record::<S>(
+                extend::record::<S, E>(
                     &mut b, &spec_e, n, &self.frame, &p.count, &p.idrays[cur], &p.hits, &self.scene.triangles, &self.scene.materials,
                     &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum, &p.flags, &p.counters,
                 )?;

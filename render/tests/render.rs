@@ -104,7 +104,7 @@ fn coherent_configurations_converge_to_normal() {
     };
     let scene = shared("stanford-like");
     let seeds = 6u32;
-    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool, coherent_glossy: bool| -> (f64, f64) {
+    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool, coherent_glossy: bool, whole_group_end: Option<f32>| -> (f64, f64) {
         let means: Vec<f64> = (0..seeds)
             .map(|s| {
                 let opts = RenderOptions {
@@ -113,6 +113,7 @@ fn coherent_configurations_converge_to_normal() {
                     group_rr,
                     compact,
                     coherent_glossy,
+                    whole_group_end,
                     patches_n: 8,
                     budget: Budget::PathsPerPixel(48),
                     seed: 1000 + s,
@@ -129,21 +130,24 @@ fn coherent_configurations_converge_to_normal() {
         let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
         (mean, var / seeds as f64)
     };
-    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true, false);
+    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true, false, None);
     let configs = [
-        (Group::Warp, InPatch::Uniform, false, true, false),
-        (Group::Block(256), InPatch::Uniform, false, true, false),
-        (Group::Grid, InPatch::Uniform, false, true, false),
-        (Group::Warp, InPatch::Uniform, true, false, false),
-        (Group::Block(256), InPatch::Cosine, true, false, false),
-        (Group::Warp, InPatch::EqualArea, false, true, true),
+        (Group::Warp, InPatch::Uniform, false, true, false, None),
+        (Group::Block(256), InPatch::Uniform, false, true, false, None),
+        (Group::Grid, InPatch::Uniform, false, true, false, None),
+        (Group::Warp, InPatch::Uniform, true, false, false, None),
+        (Group::Block(256), InPatch::Cosine, true, false, false, None),
+        (Group::Warp, InPatch::EqualArea, false, true, true, None),
+        // Whole-group termination (a path that ends triggers a shared roulette).
+        (Group::Warp, InPatch::Uniform, true, true, false, Some(0.5)),
+        (Group::Block(64), InPatch::Uniform, true, false, false, Some(0.3)),
     ];
-    for (group, in_patch, rr, compact, glossy) in configs {
-        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact, glossy);
+    for (group, in_patch, rr, compact, glossy, whole) in configs {
+        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact, glossy, whole);
         let se = (v + v0).sqrt();
         assert!(
             (m - m0).abs() < 5.0 * se + 0.01 * m0,
-            "{group:?} {in_patch:?} rr={rr} compact={compact}: mean {m:.4} vs normal {m0:.4} (se {se:.4})"
+            "{group:?} {in_patch:?} rr={rr} compact={compact} whole={whole:?}: mean {m:.4} vs normal {m0:.4} (se {se:.4})"
         );
     }
 }

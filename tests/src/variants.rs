@@ -38,10 +38,19 @@ pub fn all() -> Vec<Variant> {
         v(&vectors::vectors::INFO, "vectors", thread(&vectors::vectors::INFO), vectors::vectors::build),
     ];
     let gp = &group_pick::group_pick::INFO;
-    let mut warp_sg = Spec::portable(gp, Group::Warp);
-    warp_sg.warp_via_subgroup = true;
+    let warp_sg = warp_sg_of(gp);
     for spec in [Spec::portable(gp, Group::Thread), Spec::portable(gp, Group::Warp), warp_sg, Spec::portable(gp, Group::Block(256)), Spec::portable(gp, Group::Block(1024)), Spec::portable(gp, Group::Grid)] {
         out.push(v(gp, "group_pick", spec, group_pick::group_pick::build));
     }
+    let gv = &group_vote::group_vote::INFO;
+    for spec in [Spec::portable(gv, Group::Thread), Spec::portable(gv, Group::Warp), warp_sg_of(gv), Spec::portable(gv, Group::Block(256))] {
+        out.push(v(gv, "group_vote", spec, group_vote::group_vote::build));
+    }
     out
+}
+
+fn warp_sg_of(info: &KernelInfo) -> Spec {
+    let mut s = Spec::portable(info, Group::Warp);
+    s.warp_via_subgroup = true;
+    s
 }

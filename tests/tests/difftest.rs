@@ -258,6 +258,60 @@ fn group_levels_share_leader_value() {
     }
 }
 
+/// `group_any` at every group level that can lower it: each invocation learns whether any
+/// member of its group voted, the flag is fresh at every call, and both warp lowerings
+/// agree. At grid level the kernel does not build, with an error naming it.
+#[test]
+fn group_any_is_per_group() {
+    use cohort_tests::kernels::group_vote::*;
+    let n = 4000u32;
+    let mut rng = Rng(7);
+    let values: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+    // About one voter per 400 invocations: most warps have none, most blocks of 256 some.
+    let p = VoteParams { threshold: u32::MAX / 400, n };
+    let expected = |group_of: &dyn Fn(u32) -> u32| -> Vec<u32> {
+        let mut any = std::collections::HashMap::new();
+        for i in 0..n {
+            *any.entry(group_of(i)).or_insert(false) |= values[i as usize] < p.threshold;
+        }
+        (0..n).map(|i| if any[&group_of(i)] { 0b101 } else { 0 }).collect()
+    };
+    for d in devices() {
+        let vals = d.upload(&values).unwrap();
+        let mut specs = vec![(Group::Thread, group_vote::spec(&d, Some(Group::Thread)))];
+        specs.push((Group::Warp, cohort::Spec::portable(&group_vote::INFO, Group::Warp)));
+        specs.push((Group::Warp, group_vote::spec(&d, Some(Group::Warp))));
+        specs.push((Group::Block(256), group_vote::spec(&d, Some(Group::Block(256)))));
+        specs.push((Group::Block(64), group_vote::spec(&d, Some(Group::Block(64)))));
+        for (group, spec) in specs {
+            let out = d.alloc::<u32>(n as usize).unwrap();
+            group_vote::launch_spec(&d, &spec, n, &p, &vals, &out).unwrap();
+            let gpu = d.read(&out).unwrap();
+            let want = match group {
+                Group::Thread => expected(&|i| i),
+                Group::Warp => expected(&|i| i / 32),
+                Group::Block(b) => expected(&|i| i / b),
+                Group::Grid => unreachable!(),
+            };
+            assert!(want.iter().any(|&w| w != 0) && want.iter().any(|&w| w == 0), "{group:?}: the inputs must give both outcomes");
+            assert_eq!(gpu, want, "{group:?} on {:?} ({})", d.info().backend, spec.suffix());
+        }
+    }
+    // On the host every invocation is its own group.
+    let mut host = vec![0u32; n as usize];
+    for_each_invocation(n, 256, Group::Thread, |inv| group_vote(inv.global_index, &p, &values, &mut host));
+    let own: Vec<u32> = values.iter().map(|&v| if v < p.threshold { 0b101 } else { 0 }).collect();
+    assert_eq!(host, own);
+    let err = match cohort::emit::emit(&group_vote::build(&cohort::Spec::portable(&group_vote::INFO, Group::Grid))) {
+        Ok(_) => panic!("group_any built at grid level"),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    assert_eq!(err.stage, "build");
+    assert!(msg.contains("group_vote.rs") && msg.contains("kernel `group_vote`") && msg.contains("group_any"), "{msg}");
+    assert!(!msg.contains("compiler bug"), "{msg}");
+}
+
 #[test]
 fn casts_and_bits() {
     use cohort_tests::kernels::bits::*;

@@ -65,6 +65,9 @@ pub(crate) struct Ctx {
     pub next_binding: u32,
     pub bindings: Vec<cohort_runtime::Binding>,
     pub group_share_sites: u32,
+    /// What the kernel asks for that this specialisation cannot lower (e.g. `group_any`
+    /// at grid level): reported by `emit` as a compile error at the kernel's span.
+    pub unsupported: Vec<String>,
     /// Depth of helper bodies being inlined into their caller (no `return` there).
     pub inline_depth: u32,
     /// Entry-point values computed in the prologue, so they dominate every use.
@@ -147,6 +150,7 @@ impl Ctx {
             next_binding: 0,
             bindings: Vec::new(),
             group_share_sites: 0,
+            unsupported: Vec::new(),
             inline_depth: 0,
             prologue: Prologue::default(),
         }

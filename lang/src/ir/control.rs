@@ -18,7 +18,20 @@ fn block(body: impl FnOnce()) -> Block {
     with(|c| c.pop_block())
 }
 
+/// `if cond { then } else { otherwise }`. A condition known when the kernel is built (a
+/// literal, or a constant such as a strategy's associated `const`) picks its branch at
+/// build time and the other branch is not built at all: it may use what this
+/// specialisation cannot lower (e.g. `group_any` in a grid-level kernel).
 pub fn if_(cond: Val<bool>, then: impl FnOnce(), otherwise: impl FnOnce()) {
+    let known = with(|c| match c.f().func.expressions[cond.h] {
+        naga::Expression::Literal(naga::Literal::Bool(b)) => Some(b),
+        _ => None,
+    });
+    match known {
+        Some(true) => return then(),
+        Some(false) => return otherwise(),
+        None => {}
+    }
     let accept = block(then);
     let reject = block(otherwise);
     with(|c| c.stmt(Statement::If { condition: cond.h, accept, reject }));

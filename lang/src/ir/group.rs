@@ -101,3 +101,61 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
         }
     }
 }
+
+/// Builds `group_any(p)`: true for every invocation of the group when `p` holds for any
+/// of them. Every invocation of the workgroup must reach it (the macro checks that).
+pub fn group_any(p: Val<bool>) -> Val<bool> {
+    let (spec, pro) = with(|c| (c.spec, c.prologue));
+    let local = Val::<u32>::from_handle(pro.local_index.expect("prologue"));
+    match spec.group {
+        Group::Thread => p,
+        Group::Grid => {
+            // A dispatch cannot wait for all its workgroups, so no invocation can learn
+            // in time what the others decided.
+            with(|c| {
+                c.unsupported.push(
+                    "`group_any` has no grid-level lowering: invocations of different workgroups cannot \
+                     exchange values within one dispatch; use group = Warp or Block(n)"
+                        .into(),
+                )
+            });
+            p
+        }
+        Group::Warp if spec.warp_via_subgroup => crate::intrinsics::subgroup_any::ir(p),
+        Group::Warp | Group::Block(_) => {
+            // One flag per group in workgroup memory (zero-initialised at launch): set by
+            // the invocations where `p` holds, read by all, cleared by the group's leader
+            // once everybody has read it, so the next call starts from zero.
+            let slots = match spec.group {
+                Group::Warp => spec.workgroup_size / WARP,
+                _ => 1,
+            };
+            let ty = with(|c| {
+                let base = <std::sync::atomic::AtomicU32 as GpuType>::naga_type(&mut c.module);
+                c.ty(TypeInner::Array { base, size: ArraySize::Constant(std::num::NonZeroU32::new(slots).unwrap()), stride: 4 })
+            });
+            let site = with(|c| {
+                let s = c.group_share_sites;
+                c.group_share_sites += 1;
+                s
+            });
+            let g = add_global(&format!("group_any_{site}"), AddressSpace::WorkGroup, ty, None);
+            let arr = Place::<[std::sync::atomic::AtomicU32; 1]>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
+            let (slot_index, leader) = match spec.group {
+                Group::Warp => (local / lit(WARP), eq(local % lit(WARP), lit(0u32))),
+                _ => (lit(0u32), eq(local, lit(0u32))),
+            };
+            let slot = super::val::place_index(arr, slot_index);
+            if_(p, || {
+                slot.fetch_or(lit(1u32), std::sync::atomic::Ordering::Relaxed);
+            }, || {});
+            barrier();
+            let v = Var::new("any", super::ops::ne(slot.load(std::sync::atomic::Ordering::Relaxed), lit(0u32)));
+            barrier();
+            if_(leader, || slot.store(lit(0u32), std::sync::atomic::Ordering::Relaxed), || {});
+            // The clear must land before anybody sets the flag again.
+            barrier();
+            v.get()
+        }
+    }
+}

@@ -23,6 +23,8 @@ pub struct BuiltKernel {
     pub module: naga::Module,
     pub bindings: Vec<RtBinding>,
     pub uses_subgroups: bool,
+    /// Operations this specialisation cannot lower; `emit` turns them into an error.
+    pub unsupported: Vec<String>,
     pub spec: Spec,
     pub info: &'static KernelInfo,
 }
@@ -54,6 +56,7 @@ pub fn build_kernel(info: &'static KernelInfo, spec: Spec, declare_and_run: impl
         module: ctx.module,
         bindings: ctx.bindings,
         uses_subgroups: ctx.uses_subgroups,
+        unsupported: ctx.unsupported,
         spec,
         info,
     }

@@ -5,6 +5,7 @@ pub mod bits;
 pub mod collatz;
 pub mod generic;
 pub mod group_pick;
+pub mod group_vote;
 pub mod histogram;
 pub mod mathfns;
 pub mod rays;
