@@ -3,12 +3,21 @@
 # figures` sweep over the four embedded paper scenes at 1024x1024, with a per-point
 # kernel-time budget that fits one device call. Packs the CSV and plots into
 # $OUT/figures.tgz (the reference EXRs stay behind).
+#
+# The points of each (scene, D, column, N) group, `normal` included, are measured
+# round-robin in SLICES slices (docs/FIGURES.md): the driver lowers the GPU's clocks when
+# the host works between points, and this gives every configuration of a group about the
+# same mix of clocks. Compare within a group (paths_per_s_vs_normal, rms_at_1spp, or
+# against the `normal` row with the same group_n); absolute paths/s still follows the
+# clocks. Defaults: 4 scenes x 2 D x 3 columns x 5 N x 6 points x 0.2 s = 144 s of kernel
+# time, plus 4 x 4 s of references. bin-gpu/cohort must be built from a source that has
+# --slices (scripts/build-gpu-bins.sh).
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"
 mkdir -p "$OUT/fig"
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export COHORT_VK_VALIDATION=0
 bin-gpu/cohort figures --backend vulkan --scenes ${SCENES:-confroom,fairyforest,sponza,stanford} \
-  --n ${NS:-4,16,64,250,1000} --time ${POINT_SECONDS:-0.2} --reference-time ${REF_SECONDS:-4} \
+  --n ${NS:-4,16,64,250,1000} --time ${POINT_SECONDS:-0.2} --reference-time ${REF_SECONDS:-4} --slices ${SLICES:-8} \
   --out-dir "$OUT/fig" 2>&1 | grep -v "^\s*$" | tail -${LOG_LINES:-40}
 (cd "$OUT/fig" && tar czf ../figures.tgz *.csv *.png *.svg) && rm -rf "$OUT/fig"

@@ -2,9 +2,12 @@
 //! it renders (or reuses) a long `normal` reference, then every configuration × every N
 //! × the three columns of Fig. 4/5 (per-path RR with compaction, group RR `_rr` with
 //! compaction, `_rr (NO)` without), and the same again with interleaved sampling for
-//! Fig. 7, each under a budget of accumulated kernel time. It writes `figures.csv` (one
-//! row per point) and, per scene, Fig. 4 (paths per pixel vs N), Fig. 5 (RMS % vs N) and
-//! Fig. 7 (RMS % vs N with D > 1) as PNG and SVG. docs/FIGURES.md describes the outputs.
+//! Fig. 7, each under a budget of accumulated kernel time. The points of one scene, D,
+//! column and N (`normal` and every coherent configuration at that N) are measured
+//! together, round-robin in slices, so that the GPU's clock changes fall on all of them
+//! alike. It writes `figures.csv` (one row per point) and, per scene, Fig. 4 (paths per
+//! pixel vs N), Fig. 5 (RMS % vs N) and Fig. 7 (RMS % vs N with D > 1) as PNG and SVG.
+//! docs/FIGURES.md describes the measurement and the outputs.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -61,6 +64,10 @@ pub struct FiguresArgs {
     /// Comma-separated interleave factors D (odd, > 1) for Fig. 7, or `none`.
     #[arg(long, default_value = "5")]
     interleave: String,
+    /// Advanced: the points of a group (`normal` and every configuration at one N) take
+    /// turns on the GPU in this many slices of --time / SLICES each.
+    #[arg(long, default_value_t = 8)]
+    slices: u32,
 }
 
 /// The three columns of the paper's figures: Russian roulette per group, compaction.
@@ -98,11 +105,17 @@ struct Plan {
     height: Option<u32>,
     seed: u32,
     out_dir: PathBuf,
+    slices: u32,
 }
 
 impl Plan {
+    /// Measured points and the reference: `normal` is measured again in every group.
     fn points_per_scene(&self) -> u64 {
-        self.interleaves.len() as u64 * COLUMNS.len() as u64 * (1 + (self.configs.len() * self.ns.len()) as u64) + 1
+        self.groups_per_scene() * (1 + self.configs.len() as u64) + 1
+    }
+
+    fn groups_per_scene(&self) -> u64 {
+        (self.interleaves.len() * COLUMNS.len() * self.ns.len()) as u64
     }
 }
 
@@ -115,12 +128,23 @@ struct Row {
     label: String,
     /// `None` for `normal`, which does not depend on N.
     n: Option<u32>,
+    /// N of the group the point was measured in (`normal` is measured in every group).
+    group_n: u32,
     column: Column,
     interleave: u32,
     stats: RenderStats,
     rms_percent: f64,
     rms_abs: f64,
     ratio_vs_normal: f64,
+}
+
+impl Row {
+    /// RMS error scaled to one path per pixel (Monte Carlo error falls as 1/sqrt(paths)):
+    /// an error per path, which does not depend on how fast the paths were completed, and
+    /// so not on the GPU's clocks either.
+    fn rms_at_1spp(&self) -> f64 {
+        self.rms_percent * self.stats.paths_per_pixel().sqrt()
+    }
 }
 
 pub fn run(a: FiguresArgs) -> Result<(), String> {
@@ -143,11 +167,13 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
     );
     let log = |line: String| bar.suspend(|| eprintln!("{line}"));
     log(format!(
-        "figures: {} scenes x ({} configs x {} N + normal) x 3 columns x D in {:?}: {total} points of {:.2} s kernel time on {device_name}",
+        "figures: {} scenes x {} N x 3 columns x D in {:?}, each a group of normal + {} configs measured round-robin in {} slices: \
+         {total} points of {:.2} s kernel time (references included) on {device_name}",
         plan.scenes.len(),
-        plan.configs.len(),
         plan.ns.len(),
         plan.interleaves,
+        plan.configs.len(),
+        plan.slices,
         plan.time.as_secs_f64()
     ));
 
@@ -186,56 +212,39 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
 
         for &d in &plan.interleaves {
             for column in COLUMNS {
-                let mut normal_pps = f64::NAN;
-                let mut algorithms = vec![(Algorithm::NORMAL, None)];
-                for &alg in &plan.configs {
-                    algorithms.extend(plan.ns.iter().map(|&n| (alg, Some(n))));
-                }
-                for (alg, n) in algorithms {
-                    let label = format!("{}{}{}", alg.name(), column.suffix, if d > 1 { format!(" D{d}") } else { String::new() });
-                    let what = format!("{} {label}{}", spec.label, n.map(|n| format!(" N={n}")).unwrap_or_default());
-                    point(done, what.clone());
-                    let opts = RenderOptions {
-                        algorithm: alg,
-                        in_patch: InPatch::Uniform,
-                        patches_n: n.unwrap_or(RenderOptions::default().patches_n),
-                        group_rr: column.group_rr,
-                        interleave: d,
-                        budget: Budget::KernelTime(plan.time),
-                        seed: plan.seed,
-                        size: Some((w, h)),
-                        compact: column.compact,
-                        ..Default::default()
-                    };
-                    let (image, stats) = render(&device, &scene, opts, &bar, done).map_err(|e| format!("{what}: {e}"))?;
-                    done += 1;
-                    let pps = stats.paths_per_second();
-                    if n.is_none() {
-                        normal_pps = pps;
+                for &group_n in &plan.ns {
+                    let group = measure_group(&device, &scene, &plan, spec, (w, h), d, column, group_n, &bar, done, total)?;
+                    done += group.len() as u64;
+                    let normal_pps = group[0].1.paths_per_second();
+                    for (point, stats, image) in group {
+                        let pps = stats.paths_per_second();
+                        let row = Row {
+                            scene: spec.label.clone(),
+                            width: w,
+                            height: h,
+                            config: point.algorithm.name(),
+                            label: point.label,
+                            n: point.n,
+                            group_n,
+                            column,
+                            interleave: d,
+                            rms_percent: rms_percent(&image, &reference),
+                            rms_abs: image.rms_diff(&reference) as f64,
+                            ratio_vs_normal: pps / normal_pps,
+                            stats,
+                        };
+                        log(format!(
+                            "{}: {:.2} paths/pixel, {:.3} M paths/s (x{:.3} normal of N={group_n}), RMS {:.3} % ({:.2} % at 1 path/pixel)",
+                            point.what,
+                            row.stats.paths_per_pixel(),
+                            pps / 1e6,
+                            row.ratio_vs_normal,
+                            row.rms_percent,
+                            row.rms_at_1spp()
+                        ));
+                        rows.push(row);
                     }
-                    let row = Row {
-                        scene: spec.label.clone(),
-                        width: w,
-                        height: h,
-                        config: alg.name(),
-                        label,
-                        n,
-                        column,
-                        interleave: d,
-                        rms_percent: rms_percent(&image, &reference),
-                        rms_abs: image.rms_diff(&reference) as f64,
-                        ratio_vs_normal: pps / normal_pps,
-                        stats,
-                    };
-                    log(format!(
-                        "{what}: {:.2} paths/pixel, {:.3} M paths/s (x{:.3} normal), RMS {:.3} %",
-                        row.stats.paths_per_pixel(),
-                        pps / 1e6,
-                        row.ratio_vs_normal,
-                        row.rms_percent
-                    ));
-                    rows.push(row);
-                    // Rewritten after every point, so a long sweep that stops keeps what it measured.
+                    // Rewritten after every group, so a long sweep that stops keeps what it measured.
                     output::write_text(&csv_path, &csv(&rows, &device_name, &plan)).map_err(|e| e.to_string())?;
                 }
             }
@@ -254,10 +263,7 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     let mut scenes: Vec<SceneSpec> = Vec::new();
     for s in list("--scenes", &a.scenes)? {
         if !(embedded::names().contains(&s) || Path::new(s).is_file()) {
-            return Err(format!(
-                "unknown scene `{s}` in --scenes: not an embedded scene ({}) nor an XML file",
-                embedded::names().join(", ")
-            ));
+            return Err(format!("unknown scene `{s}` in --scenes: not an embedded scene ({}) nor an XML file", embedded::names().join(", ")));
         }
         let label = if embedded::names().contains(&s) { s.to_string() } else { file_label(s) };
         if scenes.iter().any(|o| o.label == label) {
@@ -314,7 +320,22 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
             return Err(format!("{name} must be at least 1"));
         }
     }
-    Ok(Plan { scenes, configs, ns, interleaves, time, reference_time, width: a.width, height: a.height, seed: a.seed, out_dir: a.out_dir.clone() })
+    if a.slices == 0 {
+        return Err("--slices must be at least 1".into());
+    }
+    Ok(Plan {
+        scenes,
+        configs,
+        ns,
+        interleaves,
+        time,
+        reference_time,
+        width: a.width,
+        height: a.height,
+        seed: a.seed,
+        out_dir: a.out_dir.clone(),
+        slices: a.slices,
+    })
 }
 
 /// Splits a comma-separated option; an empty list or an empty item is an error.
@@ -331,29 +352,101 @@ fn list<'s>(option: &str, s: &'s str) -> Result<Vec<&'s str>, String> {
 fn file_label(path: &str) -> String {
     let p = Path::new(path);
     let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let raw = if stem == "scene" {
-        p.parent().and_then(|d| d.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or(stem)
-    } else {
-        stem
-    };
+    let raw = if stem == "scene" { p.parent().and_then(|d| d.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or(stem) } else { stem };
     raw.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }
 
 /// A scene with its BVH already on the device.
 type Prepared = (cohort_scenes::Scene, std::sync::Arc<cohort_render::GpuScene>);
 
+/// One render on its own: the warm-ups and the reference, which nothing is compared with
+/// for speed.
 fn render(device: &Device, scene: &Prepared, opts: RenderOptions, bar: &indicatif::ProgressBar, index: u64) -> Result<(Image, RenderStats), String> {
-    let budget = opts.budget;
     let mut renderer = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| e.to_string())?;
-    // An unmeasured burst right before the measured render: between points the host
-    // works and the GPU idles, and the driver lowers its clocks (seen on the H200, down
-    // to 345 MHz); the burst brings them back so every point is measured alike.
-    renderer.set_budget(cohort_render::Budget::KernelTime(std::time::Duration::from_millis(60)));
-    renderer.render(|_, _| {}).map_err(|e| e.to_string())?;
-    renderer.set_budget(budget);
-    renderer
-        .render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64))
-        .map_err(|e| e.to_string())
+    renderer.render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64)).map_err(|e| e.to_string())
+}
+
+/// A point of a group, before it is measured.
+struct Point {
+    algorithm: Algorithm,
+    n: Option<u32>,
+    label: String,
+    /// For messages: scene, label and N.
+    what: String,
+}
+
+/// Measures one group: `normal` (first) and every coherent configuration at N =
+/// `group_n`, for one scene, D and column. All are started, then advanced in turn, in
+/// `plan.slices` slices of the budget each, so that they share whatever the GPU's clocks
+/// do meanwhile (the driver lowers them when the GPU idles, e.g. while the host computes
+/// between points; separate renders one after another were measured at clocks up to 4x
+/// apart). The renderers (about 150 MB each at 1024x1024) are dropped on return.
+#[allow(clippy::too_many_arguments)]
+fn measure_group(
+    device: &Device,
+    scene: &Prepared,
+    plan: &Plan,
+    spec: &SceneSpec,
+    (w, h): (u32, u32),
+    d: u32,
+    column: Column,
+    group_n: u32,
+    bar: &indicatif::ProgressBar,
+    first: u64,
+    total: u64,
+) -> Result<Vec<(Point, RenderStats, Image)>, String> {
+    let points: Vec<Point> = std::iter::once((Algorithm::NORMAL, None))
+        .chain(plan.configs.iter().map(|&alg| (alg, Some(group_n))))
+        .map(|(algorithm, n)| {
+            let label = format!("{}{}{}", algorithm.name(), column.suffix, if d > 1 { format!(" D{d}") } else { String::new() });
+            let what = format!("{} {label}{}", spec.label, n.map(|n| format!(" N={n}")).unwrap_or_else(|| format!(" (group N={group_n})")));
+            Point { algorithm, n, label, what }
+        })
+        .collect();
+    let mut renderers = Vec::with_capacity(points.len());
+    for point in &points {
+        let opts = RenderOptions {
+            algorithm: point.algorithm,
+            in_patch: InPatch::Uniform,
+            patches_n: point.n.unwrap_or(RenderOptions::default().patches_n),
+            group_rr: column.group_rr,
+            interleave: d,
+            budget: Budget::KernelTime(plan.time),
+            seed: plan.seed,
+            size: Some((w, h)),
+            compact: column.compact,
+            ..Default::default()
+        };
+        let mut r = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| format!("{}: {e}", point.what))?;
+        r.start().map_err(|e| format!("{}: {e}", point.what))?;
+        renderers.push(r);
+    }
+    let k = renderers.len();
+    let budget = plan.time.as_secs_f64();
+    let mut spent = vec![0f64; k];
+    let mut stats = vec![RenderStats::default(); k];
+    let name = format!("{} {}{} N={group_n}", spec.label, column.title, if d > 1 { format!(" D{d}") } else { String::new() });
+    for slice in 0..plan.slices {
+        let until = Budget::KernelTime(plan.time * (slice + 1) / plan.slices);
+        // The first turn of a slice may meet clocks lowered by whatever the host did
+        // before it: it rotates, so that no configuration always has it.
+        for j in 0..k {
+            let i = (slice as usize + j) % k;
+            bar.set_message(format!("[{}/{total}] {name}: slice {}/{} {}", first + 1, slice + 1, plan.slices, points[i].label));
+            stats[i] = renderers[i]
+                .advance_with(until, |_, s| {
+                    spent[i] = (s.kernel.total().as_secs_f64() / budget).min(1.0);
+                    bar.set_position(first * 1000 + (spent.iter().sum::<f64>() * 999.0) as u64);
+                })
+                .map_err(|e| format!("{}: {e}", points[i].what))?;
+        }
+    }
+    let mut measured = Vec::with_capacity(k);
+    for ((point, r), stats) in points.into_iter().zip(&renderers).zip(stats) {
+        let image = r.image().map_err(|e| format!("{}: {e}", point.what))?;
+        measured.push((point, stats, image));
+    }
+    Ok(measured)
 }
 
 /// The seed of the reference: different from every point's, so that the reference's noise
@@ -435,15 +528,23 @@ fn rms_percent(img: &Image, reference: &Image) -> f64 {
 }
 
 fn gcd(a: u32, b: u32) -> u32 {
-    if b == 0 { a } else { gcd(b, a % b) }
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 const CSV_HEADER: &str = "scene,width,height,device,config,label,n,rr,compaction,interleave,seed,time_budget_s,\
 paths_per_pixel,completed_paths,iterations,rays,paths_per_s,rays_per_s,\
-kernel_ms_traverse,kernel_ms_extend,kernel_ms_compact,kernel_ms_total,wall_s,rms_percent,rms_abs,paths_per_s_vs_normal";
+kernel_ms_traverse,kernel_ms_extend,kernel_ms_compact,kernel_ms_total,wall_s,rms_percent,rms_abs,paths_per_s_vs_normal,group_n,rms_at_1spp";
 
 fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
 }
 
 fn csv(rows: &[Row], device: &str, plan: &Plan) -> String {
@@ -455,7 +556,7 @@ fn csv(rows: &[Row], device: &str, plan: &Plan) -> String {
         let k = s.kernel;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.1},{:.1},{:.3},{:.3},{:.3},{:.3},{:.3},{:.5},{:.6},{:.5}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.1},{:.1},{:.3},{:.3},{:.3},{:.3},{:.3},{:.5},{:.6},{:.5},{},{:.5}",
             csv_field(&r.scene),
             r.width,
             r.height,
@@ -482,6 +583,8 @@ fn csv(rows: &[Row], device: &str, plan: &Plan) -> String {
             r.rms_percent,
             r.rms_abs,
             r.ratio_vs_normal,
+            r.group_n,
+            r.rms_at_1spp(),
         );
     }
     out
@@ -504,7 +607,8 @@ const PALETTE: [RGBColor; 8] = [
 
 struct Panel {
     title: &'static str,
-    normal: Option<f64>,
+    /// (N of the group, value), sorted by N: `normal` is measured in every group.
+    normal: Vec<(f64, f64)>,
     curves: Vec<Curve>,
 }
 
@@ -548,7 +652,8 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
             .iter()
             .map(|col| {
                 let sel = |r: &&Row| r.scene == scene && r.interleave == d && r.column.group_rr == col.group_rr && r.column.compact == col.compact;
-                let normal = rows.iter().filter(sel).find(|r| r.n.is_none()).map(metric);
+                let mut normal: Vec<(f64, f64)> = rows.iter().filter(sel).filter(|r| r.n.is_none()).map(|r| (r.group_n as f64, metric(r))).collect();
+                normal.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let curves = plan
                     .configs
                     .iter()
@@ -564,10 +669,17 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
             })
             .collect(),
     };
-    let budget = format!("{:.3} s kernel time per point", plan.time.as_secs_f64());
+    let budget = format!("{:.3} s kernel time per point, round-robin per N", plan.time.as_secs_f64());
     figs.push((
         format!("fig4_{scene}"),
-        fig(1, |r| r.stats.paths_per_pixel(), format!("Fig. 4, {scene}: completed paths per pixel vs N ({budget})"), "paths per pixel", SeriesLabelPosition::UpperLeft, true),
+        fig(
+            1,
+            |r| r.stats.paths_per_pixel(),
+            format!("Fig. 4, {scene}: completed paths per pixel vs N ({budget})"),
+            "paths per pixel",
+            SeriesLabelPosition::UpperLeft,
+            true,
+        ),
     ));
     figs.push((
         format!("fig5_{scene}"),
@@ -576,7 +688,14 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
     for &d in plan.interleaves.iter().filter(|&&d| d > 1) {
         figs.push((
             format!("fig7_{scene}_d{d}"),
-            fig(d, |r| r.rms_percent, format!("Fig. 7, {scene}: RMS error vs N, interleaved D = {d} ({budget})"), "RMS error vs reference (%)", SeriesLabelPosition::UpperRight, false),
+            fig(
+                d,
+                |r| r.rms_percent,
+                format!("Fig. 7, {scene}: RMS error vs N, interleaved D = {d} ({budget})"),
+                "RMS error vs reference (%)",
+                SeriesLabelPosition::UpperRight,
+                false,
+            ),
         ));
     }
     for (stem, fig) in &figs {
@@ -609,11 +728,15 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
 fn x_range(ns: &[u32]) -> (f64, f64) {
     let lo = ns.iter().copied().min().unwrap_or(1) as f64;
     let hi = ns.iter().copied().max().unwrap_or(1000) as f64;
-    if hi / lo < 2.0 { (lo / 1.5, hi * 1.5) } else { (lo / 1.1, hi * 1.1) }
+    if hi / lo < 2.0 {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        (lo / 1.1, hi * 1.1)
+    }
 }
 
 fn y_range(fig: &Figure) -> (f64, f64) {
-    let values = fig.panels.iter().flat_map(|p| p.normal.into_iter().chain(p.curves.iter().flat_map(|c| c.points.iter().map(|v| v.1)))).filter(|v| v.is_finite());
+    let values = fig.panels.iter().flat_map(|p| p.normal.iter().chain(p.curves.iter().flat_map(|c| c.points.iter())).map(|v| v.1)).filter(|v| v.is_finite());
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !lo.is_finite() {
         return (0.0, 1.0);
@@ -656,14 +779,16 @@ fn draw_figure<DB: DrawingBackend>(
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(e)?;
-        if let Some(v) = panel.normal.filter(|v| v.is_finite()) {
-            chart
-                .draw_series(DashedLineSeries::new([(x0, v), (x1, v)], 10, 6, line(BLACK)))
-                .map_err(e)?
-                .label("normal")
-                .legend(|(x, y)| {
-                    EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (8, 0)], line(BLACK)) + PathElement::new(vec![(13, 0), (20, 0)], line(BLACK))
-                });
+        let normal: Vec<(f64, f64)> = panel.normal.iter().copied().filter(|p| p.1.is_finite()).collect();
+        if !normal.is_empty() {
+            // `normal` does not depend on N, but it is measured in every group, alongside the
+            // configurations it is compared with: its line goes through those values (flat
+            // across the panel when the sweep has one N).
+            let dashed = if normal.len() == 1 { vec![(x0, normal[0].1), (x1, normal[0].1)] } else { normal.clone() };
+            chart.draw_series(normal.iter().map(|&p| Circle::new(p, 3, BLACK.filled()))).map_err(e)?;
+            chart.draw_series(DashedLineSeries::new(dashed, 10, 6, line(BLACK))).map_err(e)?.label("normal").legend(|(x, y)| {
+                EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (8, 0)], line(BLACK)) + PathElement::new(vec![(13, 0), (20, 0)], line(BLACK))
+            });
         }
         for Curve { name, color, points } in &panel.curves {
             let color = *color;

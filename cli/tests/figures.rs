@@ -1,4 +1,5 @@
-//! `cohort figures` end to end on a tiny sweep: the CSV's rows and columns, the plots, the
+//! `cohort figures` end to end on a tiny sweep: the CSV's rows and columns, the
+//! round-robin groups (`normal` measured with every N, ratios against it), the plots, the
 //! cached reference, and clear errors for bad lists.
 
 use std::collections::HashMap;
@@ -24,8 +25,23 @@ fn tempdir() -> PathBuf {
 }
 
 const TINY: &[&str] = &[
-    "figures", "--scenes", "cornell", "--configs", "normal,warp,grid", "--n", "4,16", "--time", "0.05",
-    "--reference-time", "0.2", "--width", "32", "--height", "32", "--backend", "vulkan",
+    "figures",
+    "--scenes",
+    "cornell",
+    "--configs",
+    "normal,warp,grid",
+    "--n",
+    "4,16",
+    "--time",
+    "0.05",
+    "--reference-time",
+    "0.2",
+    "--width",
+    "32",
+    "--height",
+    "32",
+    "--backend",
+    "vulkan",
 ];
 
 fn parse_csv(text: &str) -> (Vec<String>, Vec<HashMap<String, String>>) {
@@ -77,28 +93,51 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
 
     let (header, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
     for col in [
-        "scene", "config", "n", "rr", "compaction", "interleave", "paths_per_pixel", "paths_per_s", "rays_per_s",
-        "kernel_ms_traverse", "kernel_ms_extend", "kernel_ms_compact", "rms_percent", "rms_abs", "paths_per_s_vs_normal",
+        "scene",
+        "config",
+        "n",
+        "rr",
+        "compaction",
+        "interleave",
+        "paths_per_pixel",
+        "paths_per_s",
+        "rays_per_s",
+        "kernel_ms_traverse",
+        "kernel_ms_extend",
+        "kernel_ms_compact",
+        "rms_percent",
+        "rms_abs",
+        "paths_per_s_vs_normal",
+        "group_n",
+        "rms_at_1spp",
     ] {
         assert!(header.iter().any(|h| h == col), "missing column {col} in {header:?}");
     }
-    // D in {1, 5} x 3 columns x (normal + 2 configs x 2 N).
-    assert_eq!(rows.len(), 2 * 3 * (1 + 2 * 2), "{rows:#?}");
+    // D in {1, 5} x 3 columns x 2 N, each a group of normal + 2 configs.
+    assert_eq!(rows.len(), 2 * 3 * 2 * (1 + 2), "{rows:#?}");
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-4 * b.abs().max(1e-9);
     for d in ["1", "5"] {
         for (rr, compaction) in [("path", "true"), ("group", "true"), ("group", "false")] {
-            let sel: Vec<_> = rows.iter().filter(|r| r["interleave"] == d && r["rr"] == rr && r["compaction"] == compaction).collect();
-            assert_eq!(sel.len(), 5, "D={d} rr={rr} compaction={compaction}");
-            let normal: Vec<_> = sel.iter().filter(|r| r["config"] == "normal").collect();
-            assert_eq!(normal.len(), 1);
-            assert_eq!(normal[0]["n"], "", "normal does not depend on N");
-            assert_eq!(num(normal[0], "paths_per_s_vs_normal"), 1.0);
-            for config in ["warp", "grid"] {
-                let mut ns: Vec<_> = sel.iter().filter(|r| r["config"] == config).map(|r| r["n"].clone()).collect();
-                ns.sort();
-                assert_eq!(ns, ["16", "4"], "{config}");
-            }
-            if compaction == "false" {
-                assert!(sel.iter().all(|r| num(r, "kernel_ms_compact") == 0.0), "no compaction ran");
+            for group_n in ["4", "16"] {
+                let sel: Vec<_> =
+                    rows.iter().filter(|r| r["interleave"] == d && r["rr"] == rr && r["compaction"] == compaction && r["group_n"] == group_n).collect();
+                let what = format!("D={d} rr={rr} compaction={compaction} N={group_n}");
+                assert_eq!(sel.len(), 3, "{what}");
+                let normal: Vec<_> = sel.iter().filter(|r| r["config"] == "normal").collect();
+                assert_eq!(normal.len(), 1, "normal once per group: {what}");
+                assert_eq!(normal[0]["n"], "", "normal does not depend on N");
+                assert_eq!(num(normal[0], "paths_per_s_vs_normal"), 1.0);
+                for config in ["warp", "grid"] {
+                    let point: Vec<_> = sel.iter().filter(|r| r["config"] == config).collect();
+                    assert_eq!(point.len(), 1, "{config} {what}");
+                    assert_eq!(point[0]["n"], group_n, "{config} {what}");
+                    // Against the normal of its own group, not another group's.
+                    let ratio = num(point[0], "paths_per_s") / num(normal[0], "paths_per_s");
+                    assert!(close(num(point[0], "paths_per_s_vs_normal"), ratio), "{config} {what}: {point:?} vs {normal:?}");
+                }
+                if compaction == "false" {
+                    assert!(sel.iter().all(|r| num(r, "kernel_ms_compact") == 0.0), "no compaction ran");
+                }
             }
         }
     }
@@ -111,6 +150,7 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
         }
         let rms = num(r, "rms_percent");
         assert!(rms.is_finite() && rms > 0.0 && rms < 1000.0, "rms {rms} in {r:?}");
+        assert!(close(num(r, "rms_at_1spp"), rms * num(r, "paths_per_pixel").sqrt()), "rms_at_1spp in {r:?}");
         assert!(num(r, "kernel_ms_total") >= 50.0, "the 0.05 s budget was spent: {r:?}");
     }
 
@@ -130,7 +170,26 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     let reference = dir.join("reference_cornell_32x32.exr");
     let before = std::fs::metadata(&reference).unwrap().modified().unwrap();
     let out = cohort()
-        .args(["figures", "--scenes", "cornell", "--configs", "normal", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32", "--backend", "vulkan", "--interleave", "none"])
+        .args([
+            "figures",
+            "--scenes",
+            "cornell",
+            "--configs",
+            "normal",
+            "--n",
+            "4",
+            "--time",
+            "0.02",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--backend",
+            "vulkan",
+            "--interleave",
+            "none",
+        ])
+        .args(["--slices", "1"])
         .arg("--out-dir")
         .arg(&dir)
         .output()
@@ -141,6 +200,7 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     assert_eq!(std::fs::metadata(&reference).unwrap().modified().unwrap(), before, "the reference was rewritten");
     let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
     assert_eq!(rows.len(), 3, "normal once per column");
+    assert!(rows.iter().all(|r| r["group_n"] == "4"));
     assert!(rows.iter().all(|r| num(r, "rms_percent").is_finite()));
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -159,6 +219,7 @@ fn bad_lists_fail_naming_the_value() {
         (vec!["--n", "8,8"], "`8`"),
         (vec!["--interleave", "4"], "`4`"),
         (vec!["--time", "0"], "--time"),
+        (vec!["--slices", "0"], "--slices"),
     ] {
         let out = cohort().arg("figures").args(&args).arg("--out-dir").arg(&dir).output().unwrap();
         assert!(!out.status.success(), "{args:?} should fail");

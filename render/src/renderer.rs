@@ -1,6 +1,11 @@
 //! The iteration loop of the wavefront path tracer (PAPER.md §3): per iteration one
 //! batch `traverse` → `extend::<S>` → `compact_*`, until the budget (completed paths
 //! per pixel, or accumulated GPU time of those kernels, as in the paper) is spent.
+//!
+//! A run is resumable: [`Renderer::start`] begins it and [`Renderer::advance`] continues
+//! it to a cumulative budget, keeping the image and statistics in between, so that
+//! several renderers can take turns on the GPU (`cohort figures` does, so that each sees
+//! the same clock changes). [`Renderer::render`] is one start and one advance.
 
 use std::time::{Duration, Instant};
 
@@ -44,7 +49,11 @@ impl Algorithm {
     }
 
     pub fn name(self) -> String {
-        if self.coherent { self.group.label() } else { "normal".into() }
+        if self.coherent {
+            self.group.label()
+        } else {
+            "normal".into()
+        }
     }
 }
 
@@ -186,6 +195,20 @@ pub struct Renderer<'d> {
     paths: Paths,
     slot_to_pixel: Vec<u32>,
     opts: RenderOptions,
+    /// The run in progress: `None` until `start`.
+    run: Option<Run>,
+}
+
+/// What a run carries from one `advance` to the next.
+struct Run {
+    /// Cumulative over the run.
+    stats: RenderStats,
+    /// Which of the two `idrays` buffers holds the live rays (compaction swaps them).
+    cur: usize,
+    /// Slots not done at the last read-back.
+    live: u64,
+    /// GPU seconds of one iteration in the last submission: sizes the next one.
+    per_iteration: Option<f64>,
 }
 
 fn ns(s: &DispatchStats) -> Duration {
@@ -201,7 +224,7 @@ impl<'d> Renderer<'d> {
     /// A renderer over a scene already on the device (built once with
     /// `GpuScene::prepare`, shared by many renders, e.g. the points of a sweep).
     pub fn with_scene(device: &'d Device, scene: &Scene, gpu: std::sync::Arc<GpuScene>, opts: RenderOptions) -> Result<Self, RenderError> {
-        let mut camera = scene.camera.clone();
+        let mut camera = scene.camera;
         if let Some((w, h)) = opts.size {
             if w == 0 || h == 0 {
                 return Err(RenderError::Options(format!("image size {w}x{h} is empty")));
@@ -220,7 +243,7 @@ impl<'d> Renderer<'d> {
         if opts.patches_n == 0 || opts.patches_n > 1000 {
             return Err(RenderError::Options(format!("patch count N = {} is not in 1..=1000", opts.patches_n)));
         }
-        if opts.interleave == 0 || opts.interleave % 2 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
+        if opts.interleave & 1 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
             return Err(RenderError::Options(format!(
                 "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
                 opts.interleave
@@ -293,10 +316,12 @@ impl<'d> Renderer<'d> {
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
         };
-        Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts })
+        Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts, run: None })
     }
 
-    /// Changes the budget of the next `render` (e.g. a short unmeasured warm-up first).
+    /// Changes the budget of the next `render` or `start` (e.g. a short unmeasured
+    /// warm-up first). A paths-per-pixel budget is also where the kernels stop each
+    /// pixel, so change it between runs, not in the middle of one.
     pub fn set_budget(&mut self, budget: Budget) {
         self.frame.paths_per_pixel = match budget {
             Budget::PathsPerPixel(p) => p,
@@ -310,68 +335,165 @@ impl<'d> Renderer<'d> {
     }
 
     /// Renders until the budget is spent. `progress` receives the fraction done.
-    pub fn render(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
-        match (self.opts.algorithm.coherent, self.opts.in_patch) {
-            (false, _) => self.render_with::<Cosine>(&mut progress),
-            (true, InPatch::Uniform) => self.render_with::<CoherentUniform>(&mut progress),
-            (true, InPatch::Cosine) => self.render_with::<CoherentCosine>(&mut progress),
-            (true, InPatch::EqualArea) => self.render_with::<CoherentEqualArea>(&mut progress),
-        }
+    /// The same as [`start`](Self::start), [`advance_with`](Self::advance_with) to the
+    /// options' budget, then [`image`](Self::image).
+    pub fn render(&mut self, progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+        self.start()?;
+        let stats = self.advance_with(self.opts.budget, progress)?;
+        Ok((self.image()?, stats))
     }
 
     /// Renders with a user's diffuse sampling strategy `S` at the options' group level
     /// (see `examples/custom_sampler.rs`).
     pub fn render_custom<S: DiffuseSampler>(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
-        self.render_with::<S>(&mut progress)
+        self.start()?;
+        let stats = self.advance_sampled::<S>(self.opts.budget, &mut progress)?;
+        Ok((self.image()?, stats))
     }
 
-    fn render_with<S: DiffuseSampler>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
-        if self.opts.whole_group_end.is_some() {
-            self.render_ended_by::<S, WholeGroup>(progress)
-        } else {
-            self.render_ended_by::<S, EachPath>(progress)
-        }
-    }
-
-    fn render_ended_by<S: DiffuseSampler, E: PathEnd>(&mut self, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+    /// Begins a run from scratch (first camera ray of every slot, empty image, zero
+    /// statistics) without spending any budget; [`advance`](Self::advance) then renders.
+    /// Several renderers started together and advanced in turn share the GPU's clock
+    /// changes, which separate renders one after another do not (`cohort figures`).
+    pub fn start(&mut self) -> Result<(), RenderError> {
+        let started = Instant::now();
         let d = self.device;
         let p = &self.paths;
         let n = self.frame.slots;
-        let start = Instant::now();
         let spec_init = init_paths::spec(d, None);
+        init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
+        // A renderer can run again: each run starts from scratch.
+        d.write(&p.counters, 0, &[0, 0])?;
+        let stats = RenderStats { pixels: n as u64, wall: started.elapsed(), ..Default::default() };
+        self.run = Some(Run { stats, cur: 0, live: n as u64, per_iteration: None });
+        Ok(())
+    }
+
+    /// Continues the run begun by [`start`](Self::start) until the *cumulative* budget
+    /// `until` is reached (kernel time, or paths per pixel on average), and returns the
+    /// cumulative statistics; an `until` already reached renders nothing. Pixels stop at
+    /// the paths-per-pixel count of the options' budget (fixed for the run), so a run
+    /// under a time budget never ends by itself. The kernels are chosen by the options,
+    /// as in [`render`](Self::render).
+    pub fn advance(&mut self, until: Budget) -> Result<RenderStats, RenderError> {
+        self.advance_with(until, |_, _| {})
+    }
+
+    /// [`advance`](Self::advance) with `progress` receiving the fraction of `until` done.
+    pub fn advance_with(&mut self, until: Budget, mut progress: impl FnMut(f64, &RenderStats)) -> Result<RenderStats, RenderError> {
+        match (self.opts.algorithm.coherent, self.opts.in_patch) {
+            (false, _) => self.advance_sampled::<Cosine>(until, &mut progress),
+            (true, InPatch::Uniform) => self.advance_sampled::<CoherentUniform>(until, &mut progress),
+            (true, InPatch::Cosine) => self.advance_sampled::<CoherentCosine>(until, &mut progress),
+            (true, InPatch::EqualArea) => self.advance_sampled::<CoherentEqualArea>(until, &mut progress),
+        }
+    }
+
+    fn advance_sampled<S: DiffuseSampler>(&mut self, until: Budget, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<RenderStats, RenderError> {
+        if self.opts.whole_group_end.is_some() {
+            self.advance_ended_by::<S, WholeGroup>(until, progress)
+        } else {
+            self.advance_ended_by::<S, EachPath>(until, progress)
+        }
+    }
+
+    fn advance_ended_by<S: DiffuseSampler, E: PathEnd>(
+        &mut self,
+        until: Budget,
+        progress: &mut dyn FnMut(f64, &RenderStats),
+    ) -> Result<RenderStats, RenderError> {
+        let resumed = Instant::now();
+        let d = self.device;
+        let p = &self.paths;
+        let n = self.frame.slots;
+        let Some(run) = self.run.as_mut() else {
+            return Err(RenderError::Options("advance before start: a run must be started first".into()));
+        };
+        let done = |stats: &RenderStats| match until {
+            Budget::PathsPerPixel(pp) => stats.completed_paths as f64 / (pp as f64 * n as f64),
+            Budget::KernelTime(t) => stats.kernel.total().as_secs_f64() / t.as_secs_f64(),
+        };
+        // A run resumed at a budget it has already reached renders nothing; a fresh one
+        // always runs at least one batch (warm-ups rely on it).
+        if run.stats.iterations > 0 && (done(&run.stats) >= 1.0 || run.live == 0) {
+            progress(1.0, &run.stats);
+            return Ok(run.stats.clone());
+        }
         let spec_t = traverse::spec(d, None);
         let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
         let spec_c = compact::specs(d);
-        init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
-        // A renderer can render again (each render starts from scratch).
-        d.write(&p.counters, 0, &[0, 0])?;
-        let mut stats = RenderStats { pixels: n as u64, ..Default::default() };
-        let mut cur = 0usize;
-        let mut live = n as u64;
+        let wall_before = run.stats.wall;
         // Several iterations go into one submission, and the host reads the counters
         // once per submission: with one submission and one read-back per iteration the
         // GPU idles between iterations, and the driver lowers its clocks (seen on the
         // H200: 1980 MHz fell to 705 MHz over a sweep, with "idle" as the reason).
         let per_iteration = 2 + if self.opts.compact { compact::DISPATCHES } else { 0 };
-        let mut batch_iterations = 1u32;
         const TARGET_SUBMIT: Duration = Duration::from_millis(10);
         loop {
+            let stats = &mut run.stats;
+            // Aim at about 10 ms of GPU work per submission, without overshooting a time
+            // budget by more than a tenth of what is left. The first submission of a run
+            // is one iteration, to measure one.
+            let batch_iterations = match run.per_iteration {
+                None => 1,
+                Some(per_iter) => {
+                    let mut want = (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
+                    match until {
+                        Budget::KernelTime(t) => {
+                            let left = (t.as_secs_f64() - stats.kernel.total().as_secs_f64()).max(0.0);
+                            want = want.min((0.1 * left / per_iter.max(1e-7)).max(1.0));
+                        }
+                        // Every path needs a few iterations; finish in small steps near the end.
+                        Budget::PathsPerPixel(_) => want = want.min(((1.0 - done(stats).min(1.0)) * 200.0).max(1.0)),
+                    }
+                    want as u32
+                }
+            };
             let mut b = d.batch();
             for _ in 0..batch_iterations {
                 self.frame.iteration = stats.iterations;
-                traverse::record(&mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits)?;
+                let cur = run.cur;
+                traverse::record(
+                    &mut b,
+                    &spec_t,
+                    n,
+                    &self.frame,
+                    &p.count,
+                    &p.idrays[cur],
+                    &p.state,
+                    &p.ray_o,
+                    &p.ray_d,
+                    &self.scene.nodes,
+                    &self.scene.triangles,
+                    &p.hits,
+                )?;
                 extend::record::<S, E>(
-                    &mut b, &spec_e, n, &self.frame, &p.count, &p.idrays[cur], &p.hits, &self.scene.triangles, &self.scene.materials,
-                    &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum, &p.flags, &p.counters,
+                    &mut b,
+                    &spec_e,
+                    n,
+                    &self.frame,
+                    &p.count,
+                    &p.idrays[cur],
+                    &p.hits,
+                    &self.scene.triangles,
+                    &self.scene.materials,
+                    &p.state,
+                    &p.ray_o,
+                    &p.ray_d,
+                    &p.beta,
+                    &p.radiance,
+                    &p.accum,
+                    &p.flags,
+                    &p.counters,
                 )?;
                 if self.opts.compact {
                     compact::record(&mut b, &spec_c, n, &p.count, &p.flags, &p.block_sums, &p.total, &p.idrays[cur], &p.idrays[1 - cur])?;
-                    cur = 1 - cur;
+                    run.cur = 1 - cur;
                 }
                 stats.iterations += 1;
                 // Slots that finished inside this submission are counted as live until
                 // the next read-back: an upper bound on the rays traced.
-                stats.rays += live;
+                stats.rays += run.live;
             }
             let times = b.submit()?;
             let mut batch_time = Duration::ZERO;
@@ -381,34 +503,17 @@ impl<'d> Renderer<'d> {
                 stats.kernel.compact += it[2..].iter().map(ns).sum::<Duration>();
                 batch_time += it.iter().map(ns).sum::<Duration>();
             }
+            run.per_iteration = Some(batch_time.as_secs_f64() / batch_iterations as f64);
             let counters = d.read(&p.counters)?;
             stats.completed_paths = counters[0] as u64;
-            live = n as u64 - counters[1] as u64;
-            stats.wall = start.elapsed();
-            let fraction = match self.opts.budget {
-                Budget::PathsPerPixel(pp) => stats.completed_paths as f64 / (pp as f64 * n as f64),
-                Budget::KernelTime(t) => stats.kernel.total().as_secs_f64() / t.as_secs_f64(),
-            };
-            progress(fraction.min(1.0), &stats);
-            if fraction >= 1.0 || live == 0 {
-                break;
+            run.live = n as u64 - counters[1] as u64;
+            stats.wall = wall_before + resumed.elapsed();
+            let fraction = done(stats);
+            progress(fraction.min(1.0), stats);
+            if fraction >= 1.0 || run.live == 0 {
+                return Ok(stats.clone());
             }
-            // Aim at about 10 ms of GPU work per submission, without overshooting a time
-            // budget by more than a tenth of what is left.
-            let per_iter = batch_time.as_secs_f64() / batch_iterations as f64;
-            let mut want = (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
-            if let Budget::KernelTime(t) = self.opts.budget {
-                let left = (t.as_secs_f64() - stats.kernel.total().as_secs_f64()).max(0.0);
-                want = want.min((0.1 * left / per_iter.max(1e-7)).max(1.0));
-            }
-            if let Budget::PathsPerPixel(_) = self.opts.budget {
-                // Every path needs a few iterations; finish in small steps near the end.
-                want = want.min(((1.0 - fraction) * 200.0).max(1.0));
-            }
-            batch_iterations = want as u32;
         }
-        let image = self.image()?;
-        Ok((image, stats))
     }
 
     /// The current estimate: per pixel, the mean of its completed paths.
@@ -428,5 +533,68 @@ impl<'d> Renderer<'d> {
 }
 
 fn gcd(a: u32, b: u32) -> u32 {
-    if b == 0 { a } else { gcd(b, a % b) }
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cohort::runtime::BackendKind;
+
+    fn cornell() -> Scene {
+        cohort_scenes::embedded::load("cornell").unwrap()
+    }
+
+    fn opts(budget: Budget) -> RenderOptions {
+        RenderOptions { algorithm: Algorithm::parse("warp").unwrap(), budget, size: Some((32, 32)), ..Default::default() }
+    }
+
+    /// Slices of a run give the image of one render: batching does not change which
+    /// paths are traced, only when the host looks.
+    #[test]
+    fn a_run_in_slices_renders_what_one_render_does() {
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
+        let scene = cornell();
+        let (whole, whole_stats) = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6))).unwrap().render(|_, _| {}).unwrap();
+
+        let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6))).unwrap();
+        assert!(r.advance(Budget::PathsPerPixel(1)).is_err(), "advance before start");
+        r.start().unwrap();
+        let mut last = RenderStats::default();
+        for until in [1, 2, 4, 6] {
+            let s = r.advance(Budget::PathsPerPixel(until)).unwrap();
+            assert!(s.completed_paths >= until as u64 * 32 * 32 && s.completed_paths >= last.completed_paths, "cumulative: {s:?}");
+            assert!(s.iterations >= last.iterations && s.kernel.total() >= last.kernel.total(), "cumulative: {s:?}");
+            last = s;
+        }
+        assert_eq!(last.completed_paths, whole_stats.completed_paths);
+        let again = r.advance(Budget::PathsPerPixel(6)).unwrap();
+        assert_eq!((again.iterations, again.completed_paths), (last.iterations, last.completed_paths), "a reached budget renders nothing more");
+        let sliced = r.image().unwrap();
+        assert_eq!(sliced.paths, whole.paths);
+        assert!(sliced.pixels.iter().zip(&whole.pixels).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)), "same image");
+    }
+
+    #[test]
+    fn time_slices_accumulate_and_start_resets() {
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
+        let mut r = Renderer::new(&d, &cornell(), opts(Budget::KernelTime(Duration::from_millis(20)))).unwrap();
+        r.start().unwrap();
+        let first = r.advance(Budget::KernelTime(Duration::from_millis(10))).unwrap();
+        assert!(first.kernel.total() >= Duration::from_millis(10), "{first:?}");
+        let second = r.advance(Budget::KernelTime(Duration::from_millis(20))).unwrap();
+        assert!(second.kernel.total() >= Duration::from_millis(20) && second.iterations > first.iterations, "{second:?}");
+        assert!(second.completed_paths >= first.completed_paths && second.rays > first.rays && second.wall >= first.wall);
+        let same = r.advance(Budget::KernelTime(Duration::from_millis(15))).unwrap();
+        assert_eq!((same.iterations, same.completed_paths), (second.iterations, second.completed_paths), "an earlier budget renders nothing");
+        r.start().unwrap();
+        assert_eq!(r.image().unwrap().paths.iter().sum::<u32>(), 0, "start empties the image");
+        // The first submission of a run is one iteration, which spends any tiny budget.
+        let restarted = r.advance(Budget::KernelTime(Duration::from_nanos(1))).unwrap();
+        assert_eq!(restarted.iterations, 1, "statistics start again: {restarted:?}");
+    }
 }
