@@ -17,3 +17,4 @@ pub mod path_end;
 pub mod rng;
 pub mod sampling;
 pub mod traverse;
+pub mod traverse_wide;

@@ -22,6 +22,7 @@ pub fn slab(org: Vec3, inv_dir: Vec3, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 
 /// spill to memory on GPUs). Returns (t, u, v) in xyz and 1 in w on a hit within
 /// (tmin, tmax), else w = 0.
 #[kernel_fn]
+#[allow(clippy::too_many_arguments)]
 pub fn intersect(org: Vec3, px: Vec3, py: Vec3, pz: Vec3, shear: Vec3, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: f32) -> Vec4 {
     let a = v0 - org;
     let b = v1 - org;
@@ -74,6 +75,7 @@ pub fn axis(k: u32) -> Vec3 {
 /// Traces ray slot `r` through the BVH and writes its closest hit to `hits[r]`:
 /// (t, u, v, triangle index as bits), or w = MISS. Shared by both traversal kernels.
 #[kernel_fn]
+#[allow(clippy::manual_swap)] // std::mem::swap is not kernel code
 pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[BvhNode], tris: &[Triangle], hits: &mut [Vec4]) {
     let ri = r as usize;
     let o4 = ray_o[ri];
@@ -153,6 +155,7 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
 /// Closest hit of every live ray. `hits[r]` = (t, u, v, triangle index as bits), or
 /// w = MISS.
 #[kernel(workgroup = 64)]
+#[allow(clippy::too_many_arguments)]
 pub fn traverse(
     #[builtin(global_index)] gi: u32,
     f: &Frame,
@@ -186,6 +189,7 @@ pub fn traverse(
 /// or no hits for about 0.3% of the rays on lavapipe, although the protocol is race-free
 /// on paper; per-invocation claims are exact on every device we have.
 #[kernel(workgroup = 64)]
+#[allow(clippy::too_many_arguments)]
 pub fn traverse_persistent(
     f: &Frame,
     count: &[u32],

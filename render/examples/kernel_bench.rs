@@ -5,14 +5,22 @@
 //! - stream compaction of 2^24 ray ids with random flags against a copy kernel of the
 //!   same size, in GB/s of the minimal traffic.
 //!
-//! `cargo run --release -p cohort-render --example kernel_bench -- [scene] [backend]`
+//! The 8-wide traversal (`traverse8`, `cohort_scenes::GpuBvh8`) runs beside the BVH2
+//! kernel on the same rays in the same run (ratios within one run are what counts on a
+//! shared GPU), at workgroup sizes 64 and 128, and both kernels again on BVHs with smaller
+//! leaves (the renderer's `GpuScene` uses leaves <= 4 at cost 1.5); hits are compared with
+//! the BVH2 kernel's. Several scenes: `confroom,fairyforest,sponza,stanford`.
+//!
+//! `cargo run --release -p cohort-render --example kernel_bench -- [scene[,scene...]] [backend]`
+//! (`kernel_bench wgsl` prints the WGSL of `traverse8` and exits.)
 
 use cohort::runtime::{BackendKind, Device, DispatchStats};
 use cohort_kernels::compact;
 use cohort_kernels::copy::copy_u32;
 use cohort_kernels::layout::{BvhNode, Frame, Triangle, MISS};
 use cohort_kernels::traverse::{traverse, traverse_persistent};
-use cohort_scenes::{embedded, GpuBvh};
+use cohort_kernels::traverse_wide::{traverse8, WideNode};
+use cohort_scenes::{embedded, GpuBvh, GpuBvh8};
 use glam::{UVec4, Vec3, Vec4};
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -24,24 +32,43 @@ fn ns(s: &DispatchStats) -> f64 {
     s.gpu_time_ns.expect("this benchmark needs GPU timestamps") as f64
 }
 
+/// Hits that differ between two traversals: another triangle at a t that differs by more
+/// than rounding.
+fn differ(a: &[Vec4], b: &[Vec4]) -> usize {
+    a.iter().zip(b).filter(|(a, b)| a.w.to_bits() != b.w.to_bits() && (a.w.to_bits() == MISS || b.w.to_bits() == MISS || (a.x - b.x).abs() > 1e-5 * a.x.abs().max(1.0))).count()
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let scene_name = args.get(1).map(String::as_str).unwrap_or("confroom");
+    if args.get(1).map(String::as_str) == Some("wgsl") {
+        let built = traverse8::build(&cohort::Spec::portable(&traverse8::INFO, cohort::Group::Thread));
+        println!("{}", cohort::emit::emit(&built).unwrap().wgsl);
+        return;
+    }
+    let scenes = args.get(1).map(String::as_str).unwrap_or("confroom");
     let backend = args.get(2).and_then(|b| BackendKind::parse(b)).unwrap_or(BackendKind::Vulkan);
-    let reps = 10;
     let d = Device::new(backend).expect("device");
     let info = d.info().clone();
     println!("device: {} [{}], subgroup {}", info.adapter_name, info.backend.name(), info.subgroup_size);
+    for scene_name in scenes.split(',') {
+        bench_traversal(&d, scene_name);
+    }
+    bench_compaction(&d);
+}
 
+fn bench_traversal(d: &Device, scene_name: &str) {
+    let reps = 10;
     let scene = embedded::load(scene_name).expect("unknown scene");
     let bvh = GpuBvh::build(&scene).expect("bvh");
+    let wide = GpuBvh8::build(&bvh).expect("8-wide bvh");
+    let nodes8 = d.upload::<WideNode>(bytemuck::cast_slice(&wide.nodes)).unwrap();
     let nodes = d.upload::<BvhNode>(bytemuck::cast_slice(&bvh.nodes)).unwrap();
     let tris_host: &[Triangle] = bytemuck::cast_slice(&bvh.triangles);
     let tris = d.upload(tris_host).unwrap();
     let n = 1u32 << 20;
     let side = 1024u32;
     let cam = {
-        let mut c = scene.camera.clone();
+        let mut c = scene.camera;
         c.width = side;
         c.height = side;
         c
@@ -58,18 +85,75 @@ fn main() {
     let ids = d.upload(&(0..n).collect::<Vec<u32>>()).unwrap();
     let state = d.alloc::<UVec4>(n as usize).unwrap();
     let hits = d.alloc::<Vec4>(n as usize).unwrap();
-    let spec = traverse::spec(&d, None);
-    let time_trace = |ob: &cohort::runtime::GpuBuffer<Vec4>, db: &cohort::runtime::GpuBuffer<Vec4>| {
-        traverse::launch_spec(&d, &spec, n, &frame, &count, &ids, &state, ob, db, &nodes, &tris, &hits).unwrap();
+    type Buf<T> = cohort::runtime::GpuBuffer<T>;
+    let spec = traverse::spec(d, None);
+    let time_trace_on = |nodes: &Buf<BvhNode>, tris: &Buf<Triangle>, ob: &Buf<Vec4>, db: &Buf<Vec4>| {
+        traverse::launch_spec(d, &spec, n, &frame, &count, &ids, &state, ob, db, nodes, tris, &hits).unwrap();
         let mut b = d.batch();
         for _ in 0..reps {
-            traverse::record(&mut b, &spec, n, &frame, &count, &ids, &state, ob, db, &nodes, &tris, &hits).unwrap();
+            traverse::record(&mut b, &spec, n, &frame, &count, &ids, &state, ob, db, nodes, tris, &hits).unwrap();
         }
         median(b.submit().unwrap().iter().map(ns).collect())
     };
+    let hits8 = d.alloc::<Vec4>(n as usize).unwrap();
+    let time_trace8_on = |wg: u32, nodes8: &Buf<WideNode>, tris: &Buf<Triangle>, ob: &Buf<Vec4>, db: &Buf<Vec4>| {
+        let mut spec8 = traverse8::spec(d, None);
+        spec8.workgroup_size = wg;
+        traverse8::launch_spec(d, &spec8, n, &frame, &count, &ids, &state, ob, db, nodes8, tris, &hits8).unwrap();
+        let mut b = d.batch();
+        for _ in 0..reps {
+            traverse8::record(&mut b, &spec8, n, &frame, &count, &ids, &state, ob, db, nodes8, tris, &hits8).unwrap();
+        }
+        median(b.submit().unwrap().iter().map(ns).collect())
+    };
+    // Other leaf sizes (SAH collapse of the BVH2 before widening): (max triangles, traversal
+    // cost); both kernels run on each (their own BVH2 and triangle order).
+    type LeafVariant = (String, Buf<BvhNode>, Buf<WideNode>, Buf<Triangle>);
+    let leaf_variants: Vec<LeafVariant> = [(4u32, 1.5f32), (3, 1.0), (2, 1.0)]
+        .iter()
+        .filter_map(|&(m, c)| {
+            let b2 = GpuBvh::build_with_leaves(&scene, m, c).expect("bvh");
+            let w = match GpuBvh8::build(&b2) {
+                Ok(w) => w,
+                Err(e) => {
+                    println!("{scene_name}: leaves<={m} cost {c}: {e}");
+                    return None;
+                }
+            };
+            let label = format!("leaves<={m} cost {c} ({} BVH2 nodes, {} 8-wide nodes, stack bound {}, {:.2} triangles/leaf)", b2.nodes.len(), w.nodes.len() / 2, w.stack_bound, b2.triangles.len() as f64 / (b2.nodes.len() + 1) as f64);
+            Some((label, d.upload::<BvhNode>(bytemuck::cast_slice(&b2.nodes)).unwrap(), d.upload::<WideNode>(bytemuck::cast_slice(&w.nodes)).unwrap(), d.upload::<Triangle>(bytemuck::cast_slice(&b2.triangles)).unwrap()))
+        })
+        .collect();
+    // BVH2 and 8-wide alternate, the default BVH2 first and last, so that clock changes hit
+    // both alike; ratios are to the faster of the two default BVH2 runs.
+    let compare = |label: &str, ob: &Buf<Vec4>, db: &Buf<Vec4>| -> f64 {
+        let t2a = time_trace_on(&nodes, &tris, ob, db);
+        let h2 = d.read(&hits).unwrap();
+        let t8 = [time_trace8_on(64, &nodes8, &tris, ob, db), time_trace8_on(128, &nodes8, &tris, ob, db)];
+        let h8 = d.read(&hits8).unwrap();
+        let mut tv = Vec::new();
+        for (vl, n2, n8, vt) in &leaf_variants {
+            let t2v = time_trace_on(n2, vt, ob, db);
+            let h2v = d.read(&hits).unwrap();
+            let t8v = time_trace8_on(64, n8, vt, ob, db);
+            let h8v = d.read(&hits8).unwrap();
+            tv.push((vl, t2v, t8v, differ(&h2v, &h8v)));
+        }
+        let t2b = time_trace_on(&nodes, &tris, ob, db);
+        let t2 = t2a.min(t2b);
+        let gr = |t: f64| n as f64 / t;
+        println!("{scene_name} {label} BVH2 traverse (wg64): {:.3} ms = {:.2} Grays/s (two runs: {:.3}, {:.3} ms)", t2 / 1e6, gr(t2), t2a / 1e6, t2b / 1e6);
+        println!("{scene_name} {label} BVH8 traverse8 (wg64): {:.3} ms = {:.2} Grays/s = {:.2}x BVH2", t8[0] / 1e6, gr(t8[0]), t2 / t8[0]);
+        println!("{scene_name} {label} BVH8 traverse8 (wg128): {:.3} ms = {:.2} Grays/s = {:.2}x BVH2", t8[1] / 1e6, gr(t8[1]), t2 / t8[1]);
+        println!("{scene_name} {label} BVH8 vs BVH2 hits: {} of {n} differ", differ(&h2, &h8));
+        for (vl, t2v, t8v, diff) in tv {
+            println!("{scene_name} {label} {vl}: BVH2 traverse {:.2} Grays/s = {:.2}x, BVH8 traverse8 (wg64) {:.3} ms = {:.2} Grays/s = {:.2}x BVH2; {diff} hits differ", gr(t2v), t2 / t2v, t8v / 1e6, gr(t8v), t2 / t8v);
+        }
+        t2
+    };
     let ob = d.upload(&o).unwrap();
     let db = d.upload(&dirs).unwrap();
-    let t_primary = time_trace(&ob, &db);
+    let t_primary = compare("primary", &ob, &db);
     let primary_hits = d.read(&hits).unwrap();
 
     // Unsorted diffuse rays: cosine directions around the normal at each primary hit.
@@ -110,28 +194,38 @@ fn main() {
     }
     let ob2 = d.upload(&o2).unwrap();
     let db2 = d.upload(&d2).unwrap();
-    let t_diffuse = time_trace(&ob2, &db2);
+    let t_diffuse = compare("diffuse", &ob2, &db2);
     // Persistent threads: a fixed number of invocations drain an atomic ray counter.
     let next = d.alloc::<u32>(1).unwrap();
-    let pspec = traverse_persistent::spec(&d, None);
+    let pspec = traverse_persistent::spec(d, None);
     let mut persistent = Vec::new();
     for (label, ob, db) in [("primary", &ob, &db), ("diffuse", &ob2, &db2)] {
         for threads in [65536u32, 262144] {
             let mut times = Vec::new();
             for _ in 0..reps {
                 d.write(&next, 0, &[0]).unwrap();
-                times.push(ns(&traverse_persistent::launch_spec(&d, &pspec, threads, &frame, &count, &next, &ids, &state, ob, db, &nodes, &tris, &hits).unwrap()));
+                times.push(ns(&traverse_persistent::launch_spec(d, &pspec, threads, &frame, &count, &next, &ids, &state, ob, db, &nodes, &tris, &hits).unwrap()));
             }
             persistent.push((label, threads, median(times)));
         }
     }
-    println!("scene {scene_name}: {} triangles, {} BVH nodes, {:.1}% primary rays hit", tris_host.len(), bvh.nodes.len(), 100.0 * hit_count as f64 / n as f64);
+    println!(
+        "scene {scene_name}: {} triangles, {} BVH nodes, {} 8-wide nodes (stack bound {}), {:.1}% primary rays hit",
+        tris_host.len(),
+        bvh.nodes.len(),
+        wide.nodes.len() / 2,
+        wide.stack_bound,
+        100.0 * hit_count as f64 / n as f64
+    );
     println!("traversal primary: {:.3} ms = {:.2} Grays/s", t_primary / 1e6, n as f64 / t_primary);
     println!("traversal diffuse: {:.3} ms = {:.2} Grays/s", t_diffuse / 1e6, n as f64 / t_diffuse);
     for (label, threads, t) in persistent {
         println!("persistent traversal {label}, {threads} invocations: {:.3} ms = {:.2} Grays/s", t / 1e6, n as f64 / t);
     }
+}
 
+fn bench_compaction(d: &Device) {
+    let reps = 10;
     // Compaction vs copy, 2^24 elements.
     let m = 1u32 << 24;
     let flags_host: Vec<u32> = (0..m).map(|i| (i.wrapping_mul(2654435761) >> 16) & 1).collect();
@@ -141,7 +235,7 @@ fn main() {
     let mcount = d.upload(&[m]).unwrap();
     let scratch = d.alloc::<u32>(compact::scratch_len(m as usize)).unwrap();
     let total = d.alloc::<u32>(1).unwrap();
-    let cspecs = compact::specs(&d);
+    let cspecs = compact::specs(d);
     let mut b = d.batch();
     for _ in 0..reps {
         compact::record(&mut b, &cspecs, m, &mcount, &flags, &scratch, &total, &idr, &out).unwrap();
@@ -156,7 +250,7 @@ fn main() {
     assert!(got[..alive].windows(2).all(|w| w[0] < w[1]) && got[alive..].windows(2).all(|w| w[0] < w[1]), "compaction is not a stable partition");
     assert!(got[..alive].iter().all(|&i| flags_host[i as usize] == 1), "compaction put a flag-0 id among the flag-1 ones");
     assert_eq!(d.read(&total).unwrap()[0] as usize, alive, "compaction total");
-    let cspec = copy_u32::spec(&d, None);
+    let cspec = copy_u32::spec(d, None);
     let mut b = d.batch();
     for _ in 0..reps {
         copy_u32::record(&mut b, &cspec, m, &idr, &out).unwrap();

@@ -3,23 +3,36 @@
 
 use cohort::runtime::{Device, GpuBuffer, RuntimeError};
 use cohort_kernels::layout::{BvhNode, Material, Triangle};
-use cohort_scenes::{GpuBvh, Scene};
+use cohort_kernels::traverse_wide::WideNode;
+use cohort_scenes::{GpuBvh, GpuBvh8, Scene};
 
 pub struct GpuScene {
     pub nodes: GpuBuffer<BvhNode>,
     pub triangles: GpuBuffer<Triangle>,
     pub materials: GpuBuffer<Material>,
     pub triangle_count: usize,
+    /// The same tree as `nodes` collapsed to 8-wide nodes (`cohort_scenes::GpuBvh8`), over the
+    /// same `triangles`, for `traverse_wide::traverse8`; `None` where the tree may need more
+    /// stack than that kernel has (then use `traverse::traverse`).
+    pub nodes8: Option<GpuBuffer<WideNode>>,
 }
 
 impl GpuScene {
     /// Builds the BVH of `scene` and uploads everything the kernels read.
     pub fn prepare(device: &Device, scene: &Scene) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
-        let bvh = GpuBvh::build(scene).map_err(|e| crate::RenderError::Bvh(e.to_string()))?;
-        Ok(std::sync::Arc::new(GpuScene::upload(device, scene, &bvh)?))
+        // Leaves of at most 4 triangles (see `cohort_scenes::bvh::wide::WIDE_MAX_LEAF`): faster
+        // for the 8-wide kernel and for the BVH2 kernel alike.
+        let (bvh, wide) = GpuBvh8::build_scene(scene).map_err(|e| crate::RenderError::Bvh(e.to_string()))?;
+        Ok(std::sync::Arc::new(GpuScene::upload_with(device, scene, &bvh, wide.as_ref())?))
     }
 
+    /// Uploads `bvh` and its 8-wide form (built here).
     pub fn upload(device: &Device, scene: &Scene, bvh: &GpuBvh) -> Result<GpuScene, RuntimeError> {
+        GpuScene::upload_with(device, scene, bvh, GpuBvh8::build(bvh).ok().as_ref())
+    }
+
+    /// Uploads `bvh` and `wide`, which must have been built from `bvh`.
+    pub fn upload_with(device: &Device, scene: &Scene, bvh: &GpuBvh, wide: Option<&GpuBvh8>) -> Result<GpuScene, RuntimeError> {
         let nodes: &[BvhNode] = bytemuck::cast_slice(&bvh.nodes);
         let tris: &[Triangle] = bytemuck::cast_slice(&bvh.triangles);
         let mats = scene.gpu_materials();
@@ -29,6 +42,10 @@ impl GpuScene {
             triangles: device.upload(tris)?,
             materials: device.upload(mats)?,
             triangle_count: tris.len(),
+            nodes8: match wide {
+                Some(w) => Some(device.upload::<WideNode>(bytemuck::cast_slice(&w.nodes))?),
+                None => None,
+            },
         })
     }
 }
@@ -38,3 +55,4 @@ impl GpuScene {
 const _: () = assert!(std::mem::size_of::<BvhNode>() == std::mem::size_of::<cohort_scenes::GpuBvhNode>());
 const _: () = assert!(std::mem::size_of::<Triangle>() == std::mem::size_of::<cohort_scenes::GpuTriangle>());
 const _: () = assert!(std::mem::size_of::<Material>() == std::mem::size_of::<cohort_scenes::GpuMaterial>());
+const _: () = assert!(std::mem::size_of::<WideNode>() == std::mem::size_of::<cohort_scenes::GpuWideNode>());

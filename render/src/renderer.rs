@@ -1,6 +1,7 @@
 //! The iteration loop of the wavefront path tracer (PAPER.md §3): per iteration one
-//! batch `traverse` → `extend::<S>` → `compact_*`, until the budget (completed paths
-//! per pixel, or accumulated GPU time of those kernels, as in the paper) is spent.
+//! batch `traverse8` (or `traverse`) → `extend::<S, E>` → `compact_*`, until the budget
+//! (completed paths per pixel, or accumulated GPU time of those kernels, as in the
+//! paper) is spent.
 //!
 //! A run is resumable: [`Renderer::start`] begins it and [`Renderer::advance`] continues
 //! it to a cumulative budget, keeping the image and statistics in between, so that
@@ -17,6 +18,7 @@ use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
 use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
 use cohort_kernels::traverse::traverse;
+use cohort_kernels::traverse_wide::traverse8;
 use cohort_scenes::{morton_pixel_order, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
@@ -420,6 +422,7 @@ impl<'d> Renderer<'d> {
             return Ok(run.stats.clone());
         }
         let spec_t = traverse::spec(d, None);
+        let spec_t8 = traverse8::spec(d, None);
         let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
         let spec_c = compact::specs(d);
         let wall_before = run.stats.wall;
@@ -453,20 +456,16 @@ impl<'d> Renderer<'d> {
             for _ in 0..batch_iterations {
                 self.frame.iteration = stats.iterations;
                 let cur = run.cur;
-                traverse::record(
-                    &mut b,
-                    &spec_t,
-                    n,
-                    &self.frame,
-                    &p.count,
-                    &p.idrays[cur],
-                    &p.state,
-                    &p.ray_o,
-                    &p.ray_d,
-                    &self.scene.nodes,
-                    &self.scene.triangles,
-                    &p.hits,
-                )?;
+                // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep
+                // for its stack.
+                match &self.scene.nodes8 {
+                    Some(n8) => traverse8::record(
+                        &mut b, &spec_t8, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, n8, &self.scene.triangles, &p.hits,
+                    )?,
+                    None => traverse::record(
+                        &mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits,
+                    )?,
+                }
                 extend::record::<S, E>(
                     &mut b,
                     &spec_e,

@@ -25,6 +25,13 @@ const POST_COLLAPSE_REINSERTION_RATIO: f32 = 0.10;
 const COLLAPSE_TRAVERSAL_COST: f32 = 3.0;
 
 pub(super) fn build(tris: &Triangles) -> Result<GpuBvh, BvhError> {
+    build_with(tris, MAX_LEAF_TRIANGLES, COLLAPSE_TRAVERSAL_COST)
+}
+
+/// [`build`] with another leaf collapse: at most `max_leaf` (1..=8) triangles per leaf, SAH
+/// traversal cost `traversal_cost` (relative to one triangle test; higher gives larger leaves).
+pub(super) fn build_with(tris: &Triangles, max_leaf: u32, traversal_cost: f32) -> Result<GpuBvh, BvhError> {
+    let max_leaf = max_leaf.clamp(1, MAX_LEAF_TRIANGLES);
     let n = tris.len();
     if n == 0 {
         return Ok(GpuBvh::default());
@@ -51,7 +58,7 @@ pub(super) fn build(tris: &Triangles) -> Result<GpuBvh, BvhError> {
     );
     let mut reinsertion = ReinsertionOptimizer::default();
     reinsertion.run(&mut bvh, REINSERTION_RATIO, None);
-    collapse(&mut bvh, MAX_LEAF_TRIANGLES, COLLAPSE_TRAVERSAL_COST);
+    collapse(&mut bvh, max_leaf, traversal_cost);
     reinsertion.run(&mut bvh, POST_COLLAPSE_REINSERTION_RATIO, None);
 
     let mut out = Flattener {

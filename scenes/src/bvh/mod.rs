@@ -44,11 +44,13 @@
 
 mod build;
 mod traverse;
+pub mod wide;
 
 use glam::Vec3;
 
 pub use build::BvhError;
 pub use traverse::{brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, Hit};
+pub use wide::{closest_hit8, GpuBvh8, GpuWideNode, WideBvhError};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -116,6 +118,13 @@ impl GpuBvh {
     /// Builds with obvhs (PLOC + reinsertion + SAH leaf collapse) and flattens; see `build.rs`.
     pub fn build(scene: &crate::Scene) -> Result<GpuBvh, BvhError> {
         build::build(&scene.triangles)
+    }
+
+    /// [`GpuBvh::build`] with another SAH leaf collapse: at most `max_leaf` (1..=8) triangles
+    /// per leaf, traversal cost `traversal_cost` relative to a triangle test (the default build
+    /// uses 8 and 3).
+    pub fn build_with_leaves(scene: &crate::Scene, max_leaf: u32, traversal_cost: f32) -> Result<GpuBvh, BvhError> {
+        build::build_with(&scene.triangles, max_leaf, traversal_cost)
     }
 
     pub fn node_bytes(&self) -> &[u8] {

@@ -30,14 +30,14 @@ pub struct Hit {
 
 /// Per-ray constants of the watertight test: the axis permutation and shear.
 #[derive(Clone, Copy)]
-struct Shear {
+pub(super) struct Shear {
     origin: Vec3,
     k: [usize; 3],
     s: Vec3,
 }
 
 impl Shear {
-    fn new(origin: Vec3, dir: Vec3) -> Shear {
+    pub(super) fn new(origin: Vec3, dir: Vec3) -> Shear {
         let a = dir.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
@@ -116,7 +116,7 @@ pub fn intersect_triangle(
 const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Entry distance of the ray into box [lo, hi] within (tmin, tmax), or None.
-fn slab(origin: Vec3, inv: Vec3, lo: [f32; 3], hi: [f32; 3], tmin: f32, tmax: f32) -> Option<f32> {
+pub(super) fn slab(origin: Vec3, inv: Vec3, lo: [f32; 3], hi: [f32; 3], tmin: f32, tmax: f32) -> Option<f32> {
     let mut near = tmin;
     let mut far = tmax;
     for k in 0..3 {
@@ -127,6 +127,28 @@ fn slab(origin: Vec3, inv: Vec3, lo: [f32; 3], hi: [f32; 3], tmin: f32, tmax: f3
         far = far.min(t0.max(t1) * FAR_SCALE);
     }
     (near <= far).then_some(near)
+}
+
+/// Closest hit among the triangles of leaf reference `r`, with `tmin < t < tmax` (the first of
+/// equal distances in leaf order).
+pub(super) fn leaf_closest(bvh: &GpuBvh, shear: &Shear, r: u32, tmin: f32, tmax: f32) -> Option<Hit> {
+    let (first, count) = decode_leaf(r);
+    let mut best = None;
+    let mut best_t = tmax;
+    for i in first..first + count {
+        let t = &bvh.triangles[i as usize];
+        let v = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
+        if let Some((t_hit, u, w)) = shear.hit(v[0], v[1], v[2], tmin, best_t) {
+            best_t = t_hit;
+            best = Some(Hit {
+                t: t_hit,
+                triangle_index: t.original,
+                u,
+                v: w,
+            });
+        }
+    }
+    best
 }
 
 /// Closest hit through the BVH, with `tmin < t < tmax`.
@@ -142,19 +164,9 @@ pub fn closest_hit(bvh: &GpuBvh, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) 
     stack.push(0);
     while let Some(r) = stack.pop() {
         if is_leaf(r) {
-            let (first, count) = decode_leaf(r);
-            for i in first..first + count {
-                let t = &bvh.triangles[i as usize];
-                let v = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
-                if let Some((t_hit, u, w)) = shear.hit(v[0], v[1], v[2], tmin, best_t) {
-                    best_t = t_hit;
-                    best = Some(Hit {
-                        t: t_hit,
-                        triangle_index: t.original,
-                        u,
-                        v: w,
-                    });
-                }
+            if let Some(h) = leaf_closest(bvh, &shear, r, tmin, best_t) {
+                best_t = h.t;
+                best = Some(h);
             }
             continue;
         }
