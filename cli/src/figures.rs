@@ -64,25 +64,52 @@ pub struct FiguresArgs {
     /// Comma-separated interleave factors D (odd, > 1) for Fig. 7, or `none`.
     #[arg(long, default_value = "5")]
     interleave: String,
+    /// Comma-separated columns of the figures: `path` (per-path RR, compaction), `rr`
+    /// (group RR), `rr-no` (group RR, no compaction), and beyond the paper `whole` and
+    /// `whole-no` (whole-group termination, with and without compaction; `grid` is
+    /// skipped there, as it cannot vote).
+    #[arg(long, default_value = "path,rr,rr-no")]
+    columns: String,
+    /// Continuation probability of the whole-group-end roulette (columns `whole`, `whole-no`).
+    #[arg(long, default_value_t = 0.5)]
+    end_continue: f32,
     /// Advanced: the points of a group (`normal` and every configuration at one N) take
     /// turns on the GPU in this many slices of --time / SLICES each.
     #[arg(long, default_value_t = 8)]
     slices: u32,
 }
 
-/// The three columns of the paper's figures: Russian roulette per group, compaction.
-const COLUMNS: [Column; 3] = [
-    Column { group_rr: false, compact: true, suffix: "", title: "per-path RR, compaction" },
-    Column { group_rr: true, compact: true, suffix: "_rr", title: "_rr: group RR, compaction" },
-    Column { group_rr: true, compact: false, suffix: "_rr (NO)", title: "_rr (NO): group RR, no compaction" },
+/// The columns of the figures: the paper's three (Russian roulette per path or per
+/// group, compaction or not) and whole-group termination with and without compaction.
+const COLUMNS: [Column; 5] = [
+    Column { key: "path", group_rr: false, whole: false, compact: true, suffix: "", title: "per-path RR, compaction" },
+    Column { key: "rr", group_rr: true, whole: false, compact: true, suffix: "_rr", title: "_rr: group RR, compaction" },
+    Column { key: "rr-no", group_rr: true, whole: false, compact: false, suffix: "_rr (NO)", title: "_rr (NO): group RR, no compaction" },
+    Column { key: "whole", group_rr: true, whole: true, compact: true, suffix: "_whole", title: "_whole: whole-group end, compaction" },
+    Column { key: "whole-no", group_rr: true, whole: true, compact: false, suffix: "_whole (NO)", title: "_whole (NO): whole-group end, no compaction" },
 ];
 
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, PartialEq)]
 struct Column {
+    /// Its name in --columns.
+    key: &'static str,
     group_rr: bool,
+    /// Whole-group termination (`--rr whole`).
+    whole: bool,
     compact: bool,
     suffix: &'static str,
     title: &'static str,
+}
+
+impl Column {
+    /// The CSV's `rr` value.
+    fn rr(&self) -> &'static str {
+        match (self.whole, self.group_rr) {
+            (true, _) => "whole",
+            (false, true) => "group",
+            (false, false) => "path",
+        }
+    }
 }
 
 struct SceneSpec {
@@ -106,16 +133,21 @@ struct Plan {
     seed: u32,
     out_dir: PathBuf,
     slices: u32,
+    columns: Vec<Column>,
+    end_continue: f32,
 }
 
 impl Plan {
     /// Measured points and the reference: `normal` is measured again in every group.
     fn points_per_scene(&self) -> u64 {
-        self.groups_per_scene() * (1 + self.configs.len() as u64) + 1
+        let per_group: u64 = self.columns.iter().map(|c| 1 + self.configs_of(c).len() as u64).sum();
+        (self.interleaves.len() * self.ns.len()) as u64 * per_group + 1
     }
 
-    fn groups_per_scene(&self) -> u64 {
-        (self.interleaves.len() * COLUMNS.len() * self.ns.len()) as u64
+    /// The coherent configurations measured in `column` (the grid cannot vote, so it has
+    /// no whole-group termination).
+    fn configs_of(&self, column: &Column) -> Vec<Algorithm> {
+        self.configs.iter().copied().filter(|a| !(column.whole && a.group == cohort::Group::Grid)).collect()
     }
 }
 
@@ -211,7 +243,7 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
         done += 1;
 
         for &d in &plan.interleaves {
-            for column in COLUMNS {
+            for &column in &plan.columns {
                 for &group_n in &plan.ns {
                     let group = measure_group(&device, &scene, &plan, spec, (w, h), d, column, group_n, &bar, done, total)?;
                     done += group.len() as u64;
@@ -323,7 +355,22 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     if a.slices == 0 {
         return Err("--slices must be at least 1".into());
     }
+    let mut columns: Vec<Column> = Vec::new();
+    for c in list("--columns", &a.columns)? {
+        let col = COLUMNS.iter().find(|k| k.key == c).ok_or_else(|| {
+            format!("unknown column `{c}` in --columns (available: {})", COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", "))
+        })?;
+        if columns.contains(col) {
+            return Err(format!("column `{c}` is listed twice in --columns"));
+        }
+        columns.push(*col);
+    }
+    if !(a.end_continue > 0.0 && a.end_continue <= 1.0) {
+        return Err(format!("--end-continue {} is not in (0, 1]", a.end_continue));
+    }
     Ok(Plan {
+        columns,
+        end_continue: a.end_continue,
         scenes,
         configs,
         ns,
@@ -396,7 +443,7 @@ fn measure_group(
     total: u64,
 ) -> Result<Vec<(Point, RenderStats, Image)>, String> {
     let points: Vec<Point> = std::iter::once((Algorithm::NORMAL, None))
-        .chain(plan.configs.iter().map(|&alg| (alg, Some(group_n))))
+        .chain(plan.configs_of(&column).into_iter().map(|alg| (alg, Some(group_n))))
         .map(|(algorithm, n)| {
             let label = format!("{}{}{}", algorithm.name(), column.suffix, if d > 1 { format!(" D{d}") } else { String::new() });
             let what = format!("{} {label}{}", spec.label, n.map(|n| format!(" N={n}")).unwrap_or_else(|| format!(" (group N={group_n})")));
@@ -415,6 +462,7 @@ fn measure_group(
             seed: plan.seed,
             size: Some((w, h)),
             compact: column.compact,
+            whole_group_end: column.whole.then_some(plan.end_continue),
             ..Default::default()
         };
         let mut r = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| format!("{}: {e}", point.what))?;
@@ -564,7 +612,7 @@ fn csv(rows: &[Row], device: &str, plan: &Plan) -> String {
             r.config,
             csv_field(&r.label),
             r.n.map(|n| n.to_string()).unwrap_or_default(),
-            if r.column.group_rr { "group" } else { "path" },
+            r.column.rr(),
             r.column.compact,
             r.interleave,
             plan.seed,
@@ -638,7 +686,8 @@ struct Fonts {
 }
 const SVG_FONTS: Fonts = Fonts { title: 24, caption: 17, desc: 15, label: 13 };
 const PNG_FONTS: Fonts = Fonts { title: 36, caption: 36, desc: 18, label: 18 };
-const FIG_SIZE: (u32, u32) = (1950, 650);
+/// Size of one panel (one column of the figure).
+const PANEL_SIZE: (u32, u32) = (650, 650);
 
 fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<PathBuf>, String> {
     let mut written = Vec::new();
@@ -648,14 +697,15 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
         y_label,
         legend,
         y_from_zero,
-        panels: COLUMNS
+        panels: plan
+            .columns
             .iter()
             .map(|col| {
-                let sel = |r: &&Row| r.scene == scene && r.interleave == d && r.column.group_rr == col.group_rr && r.column.compact == col.compact;
+                let sel = |r: &&Row| r.scene == scene && r.interleave == d && r.column == *col;
                 let mut normal: Vec<(f64, f64)> = rows.iter().filter(sel).filter(|r| r.n.is_none()).map(|r| (r.group_n as f64, metric(r))).collect();
                 normal.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let curves = plan
-                    .configs
+                    .configs_of(col)
                     .iter()
                     .enumerate()
                     .map(|(i, alg)| {
@@ -703,23 +753,24 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
         let mut ticks: Vec<f64> = plan.ns.iter().map(|&n| n as f64).collect();
         ticks.sort_by(f64::total_cmp);
         let y = y_range(fig);
+        let size = (PANEL_SIZE.0 * fig.panels.len().max(1) as u32, PANEL_SIZE.1);
         let svg_path = plan.out_dir.join(format!("{stem}.svg"));
         let mut svg = String::new();
         {
-            let root = SVGBackend::with_string(&mut svg, FIG_SIZE).into_drawing_area();
+            let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
             draw_figure(root, fig, x, &ticks, y, &SVG_FONTS).map_err(|e| format!("cannot draw {}: {e}", svg_path.display()))?;
         }
         output::write_text(&svg_path, &svg).map_err(|e| e.to_string())?;
         written.push(svg_path);
 
         let png_path = plan.out_dir.join(format!("{stem}.png"));
-        let (w, h) = FIG_SIZE;
+        let (w, h) = size;
         let mut buf = vec![255u8; (w * h * 3) as usize];
         {
-            let root = TextBitmap(BitMapBackend::with_buffer(&mut buf, FIG_SIZE)).into_drawing_area();
+            let root = TextBitmap(BitMapBackend::with_buffer(&mut buf, size)).into_drawing_area();
             draw_figure(root, fig, x, &ticks, y, &PNG_FONTS).map_err(|e| format!("cannot draw {}: {e}", png_path.display()))?;
         }
-        write_png_rgb(&png_path, FIG_SIZE, &buf)?;
+        write_png_rgb(&png_path, size, &buf)?;
         written.push(png_path);
     }
     Ok(written)

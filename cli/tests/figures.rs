@@ -202,6 +202,21 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     assert_eq!(rows.len(), 3, "normal once per column");
     assert!(rows.iter().all(|r| r["group_n"] == "4"));
     assert!(rows.iter().all(|r| num(r, "rms_percent").is_finite()));
+
+    // Whole-group termination columns: every configuration but the grid (which cannot vote).
+    let out = cohort()
+        .args(["figures", "--scenes", "cornell", "--configs", "warp,grid", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32"])
+        .args(["--backend", "vulkan", "--interleave", "none", "--columns", "whole,whole-no", "--end-continue", "0.4", "--slices", "2"])
+        .arg("--out-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
+    assert_eq!(rows.len(), 4, "normal and warp, in two columns: {rows:#?}");
+    assert!(rows.iter().all(|r| r["rr"] == "whole" && r["config"] != "grid"), "{rows:#?}");
+    assert_eq!(rows.iter().filter(|r| r["compaction"] == "false").count(), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -220,6 +235,9 @@ fn bad_lists_fail_naming_the_value() {
         (vec!["--interleave", "4"], "`4`"),
         (vec!["--time", "0"], "--time"),
         (vec!["--slices", "0"], "--slices"),
+        (vec!["--columns", "path,sideways"], "sideways"),
+        (vec!["--columns", "rr,rr"], "`rr`"),
+        (vec!["--end-continue", "0"], "--end-continue"),
     ] {
         let out = cohort().arg("figures").args(&args).arg("--out-dir").arg(&dir).output().unwrap();
         assert!(!out.status.success(), "{args:?} should fail");
