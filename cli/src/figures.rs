@@ -242,10 +242,14 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
         let reference = reference_image(&device, &scene, spec, (w, h), &plan, &bar, done, &log)?;
         done += 1;
 
+        // One renderer per place in a group, reconfigured for every group: a new renderer
+        // per point cost the host more time than the point's GPU work, and the idle GPU
+        // lowered its clocks (docs/FIGURES.md).
+        let mut pool: Vec<Renderer> = Vec::new();
         for &d in &plan.interleaves {
             for &column in &plan.columns {
                 for &group_n in &plan.ns {
-                    let group = measure_group(&device, &scene, &plan, spec, (w, h), d, column, group_n, &bar, done, total)?;
+                    let group = measure_group(&device, &scene, &plan, spec, (w, h), d, column, group_n, &bar, done, total, &mut pool)?;
                     done += group.len() as u64;
                     let normal_pps = group[0].1.paths_per_second();
                     for (point, stats, image) in group {
@@ -427,10 +431,11 @@ struct Point {
 /// `plan.slices` slices of the budget each, so that they share whatever the GPU's clocks
 /// do meanwhile (the driver lowers them when the GPU idles, e.g. while the host computes
 /// between points; separate renders one after another were measured at clocks up to 4x
-/// apart). The renderers (about 150 MB each at 1024x1024) are dropped on return.
+/// apart). `pool` holds the renderers of earlier groups (about 150 MB each at 1024x1024),
+/// reconfigured here rather than made anew.
 #[allow(clippy::too_many_arguments)]
-fn measure_group(
-    device: &Device,
+fn measure_group<'d>(
+    device: &'d Device,
     scene: &Prepared,
     plan: &Plan,
     spec: &SceneSpec,
@@ -441,6 +446,7 @@ fn measure_group(
     bar: &indicatif::ProgressBar,
     first: u64,
     total: u64,
+    pool: &mut Vec<Renderer<'d>>,
 ) -> Result<Vec<(Point, RenderStats, Image)>, String> {
     let points: Vec<Point> = std::iter::once((Algorithm::NORMAL, None))
         .chain(plan.configs_of(&column).into_iter().map(|alg| (alg, Some(group_n))))
@@ -450,8 +456,7 @@ fn measure_group(
             Point { algorithm, n, label, what }
         })
         .collect();
-    let mut renderers = Vec::with_capacity(points.len());
-    for point in &points {
+    for (i, point) in points.iter().enumerate() {
         let opts = RenderOptions {
             algorithm: point.algorithm,
             in_patch: InPatch::Uniform,
@@ -465,10 +470,14 @@ fn measure_group(
             whole_group_end: column.whole.then_some(plan.end_continue),
             ..Default::default()
         };
-        let mut r = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| format!("{}: {e}", point.what))?;
-        r.start().map_err(|e| format!("{}: {e}", point.what))?;
-        renderers.push(r);
+        if i < pool.len() {
+            pool[i].reconfigure(opts).map_err(|e| format!("{}: {e}", point.what))?;
+        } else {
+            pool.push(Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| format!("{}: {e}", point.what))?);
+        }
+        pool[i].start().map_err(|e| format!("{}: {e}", point.what))?;
     }
+    let renderers = &mut pool[..points.len()];
     let k = renderers.len();
     let budget = plan.time.as_secs_f64();
     let mut spent = vec![0f64; k];
@@ -490,7 +499,7 @@ fn measure_group(
         }
     }
     let mut measured = Vec::with_capacity(k);
-    for ((point, r), stats) in points.into_iter().zip(&renderers).zip(stats) {
+    for ((point, r), stats) in points.into_iter().zip(renderers.iter()).zip(stats) {
         let image = r.image().map_err(|e| format!("{}: {e}", point.what))?;
         measured.push((point, stats, image));
     }

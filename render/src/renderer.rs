@@ -239,36 +239,9 @@ impl<'d> Renderer<'d> {
         if n > (1 << 26) {
             return Err(RenderError::Options(format!("image size {w}x{h} is larger than this renderer supports (2^26 pixels)")));
         }
-        if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
-            return Err(RenderError::Options(format!("Russian roulette continuation {} is not in (0, 1]", opts.rr_continue)));
-        }
-        if opts.patches_n == 0 || opts.patches_n > 1000 {
-            return Err(RenderError::Options(format!("patch count N = {} is not in 1..=1000", opts.patches_n)));
-        }
-        if opts.interleave & 1 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
-            return Err(RenderError::Options(format!(
-                "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
-                opts.interleave
-            )));
-        }
-        if let Some(q) = opts.whole_group_end {
-            if !(q > 0.0 && q <= 1.0) {
-                return Err(RenderError::Options(format!("whole-group end continuation {q} is not in (0, 1] (0 would cut paths short: biased)")));
-            }
-            if opts.algorithm.group == Group::Grid {
-                return Err(RenderError::Options(
-                    "whole-group termination needs warp or block groups: the grid cannot vote within one dispatch (and with 2^20 paths \
-                     one of them ends at every bounce, so it would only be a group roulette; use --rr group)"
-                        .into(),
-                ));
-            }
-        }
+        validate(&opts, w, h)?;
         let f = camera.frame();
-        let paths_per_pixel = match opts.budget {
-            Budget::PathsPerPixel(p) => p,
-            Budget::KernelTime(_) => 0,
-        };
-        let frame = Frame {
+        let mut frame = Frame {
             cam_origin: f.origin,
             width: w,
             cam_forward: f.forward,
@@ -276,31 +249,16 @@ impl<'d> Renderer<'d> {
             cam_right: f.right,
             slots: n as u32,
             cam_up: f.up,
-            seed: opts.seed,
             environment: scene.environment,
-            paths_per_pixel,
             max_depth: scene.integrator.max_depth.max(0) as u32,
             rr_depth: 0,
-            rr_continue: opts.rr_continue,
             has_geometry: (gpu.triangle_count > 0) as u32,
             iteration: 0,
-            patches_n: opts.patches_n,
-            group_rr: opts.group_rr as u32,
-            coherent_glossy: (opts.coherent_glossy && opts.algorithm.coherent) as u32,
-            group_end_continue: opts.whole_group_end.unwrap_or(0.0),
             ..Default::default()
         };
+        apply_options(&mut frame, &opts);
         let n = n as usize;
-        // Interleaved sampling: slot g renders pixel D * Morton(g) (mod the size), which
-        // spreads a group's block of pixels over the image.
-        let d = opts.interleave;
-        let slot_to_pixel: Vec<u32> = morton_pixel_order(w, h)
-            .into_iter()
-            .map(|p| {
-                let (x, y) = (p % w, p / w);
-                ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
-            })
-            .collect();
+        let slot_to_pixel = slot_order(w, h, opts.interleave);
         let blocks = compact::scratch_len(n);
         let paths = Paths {
             slot_pixel: device.upload(&slot_to_pixel)?,
@@ -319,6 +277,28 @@ impl<'d> Renderer<'d> {
             counters: device.alloc(2)?,
         };
         Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts, run: None })
+    }
+
+    /// Takes new options for the next run, keeping the scene, the image size and every
+    /// buffer: cheaper than a new renderer (no allocation, no host-side set-up beyond a
+    /// changed interleave), which keeps the GPU busy in sweeps (`cohort figures`). The
+    /// size must stay the same; a run in progress is dropped.
+    pub fn reconfigure(&mut self, opts: RenderOptions) -> Result<(), RenderError> {
+        let (w, h) = self.size();
+        if let Some(size) = opts.size {
+            if size != (w, h) {
+                return Err(RenderError::Options(format!("reconfigure cannot change the image size {w}x{h} to {}x{}", size.0, size.1)));
+            }
+        }
+        validate(&opts, w, h)?;
+        if opts.interleave != self.opts.interleave {
+            self.slot_to_pixel = slot_order(w, h, opts.interleave);
+            self.device.write(&self.paths.slot_pixel, 0, &self.slot_to_pixel)?;
+        }
+        apply_options(&mut self.frame, &opts);
+        self.opts = opts;
+        self.run = None;
+        Ok(())
     }
 
     /// Changes the budget of the next `render` or `start` (e.g. a short unmeasured
@@ -460,10 +440,32 @@ impl<'d> Renderer<'d> {
                 // for its stack.
                 match &self.scene.nodes8 {
                     Some(n8) => traverse8::record(
-                        &mut b, &spec_t8, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, n8, &self.scene.triangles, &p.hits,
+                        &mut b,
+                        &spec_t8,
+                        n,
+                        &self.frame,
+                        &p.count,
+                        &p.idrays[cur],
+                        &p.state,
+                        &p.ray_o,
+                        &p.ray_d,
+                        n8,
+                        &self.scene.triangles,
+                        &p.hits,
                     )?,
                     None => traverse::record(
-                        &mut b, &spec_t, n, &self.frame, &p.count, &p.idrays[cur], &p.state, &p.ray_o, &p.ray_d, &self.scene.nodes, &self.scene.triangles, &p.hits,
+                        &mut b,
+                        &spec_t,
+                        n,
+                        &self.frame,
+                        &p.count,
+                        &p.idrays[cur],
+                        &p.state,
+                        &p.ray_o,
+                        &p.ray_d,
+                        &self.scene.nodes,
+                        &self.scene.triangles,
+                        &p.hits,
                     )?,
                 }
                 extend::record::<S, E>(
@@ -531,6 +533,61 @@ impl<'d> Renderer<'d> {
     }
 }
 
+/// Checks the options that do not depend on the scene, for an image of `w` x `h`.
+fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
+    if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
+        return Err(RenderError::Options(format!("Russian roulette continuation {} is not in (0, 1]", opts.rr_continue)));
+    }
+    if opts.patches_n == 0 || opts.patches_n > 1000 {
+        return Err(RenderError::Options(format!("patch count N = {} is not in 1..=1000", opts.patches_n)));
+    }
+    if opts.interleave & 1 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
+        return Err(RenderError::Options(format!(
+            "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
+            opts.interleave
+        )));
+    }
+    if let Some(q) = opts.whole_group_end {
+        if !(q > 0.0 && q <= 1.0) {
+            return Err(RenderError::Options(format!("whole-group end continuation {q} is not in (0, 1] (0 would cut paths short: biased)")));
+        }
+        if opts.algorithm.group == Group::Grid {
+            return Err(RenderError::Options(
+                "whole-group termination needs warp or block groups: the grid cannot vote within one dispatch (and with 2^20 paths \
+                     one of them ends at every bounce, so it would only be a group roulette; use --rr group)"
+                    .into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes the options into the frame the kernels read.
+fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
+    frame.seed = opts.seed;
+    frame.paths_per_pixel = match opts.budget {
+        Budget::PathsPerPixel(p) => p,
+        Budget::KernelTime(_) => 0,
+    };
+    frame.rr_continue = opts.rr_continue;
+    frame.patches_n = opts.patches_n;
+    frame.group_rr = opts.group_rr as u32;
+    frame.coherent_glossy = (opts.coherent_glossy && opts.algorithm.coherent) as u32;
+    frame.group_end_continue = opts.whole_group_end.unwrap_or(0.0);
+}
+
+/// Pixel of every ray slot. Interleaved sampling: slot g renders pixel D * Morton(g)
+/// (mod the size), which spreads a group's block of pixels over the image.
+fn slot_order(w: u32, h: u32, d: u32) -> Vec<u32> {
+    morton_pixel_order(w, h)
+        .into_iter()
+        .map(|p| {
+            let (x, y) = (p % w, p / w);
+            ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
+        })
+        .collect()
+}
+
 fn gcd(a: u32, b: u32) -> u32 {
     if b == 0 {
         a
@@ -595,5 +652,32 @@ mod tests {
         // The first submission of a run is one iteration, which spends any tiny budget.
         let restarted = r.advance(Budget::KernelTime(Duration::from_nanos(1))).unwrap();
         assert_eq!(restarted.iterations, 1, "statistics start again: {restarted:?}");
+    }
+
+    /// A reconfigured renderer renders exactly what a new one with those options does,
+    /// including a changed interleave (its slot order is rewritten on the GPU).
+    #[test]
+    fn reconfigure_equals_a_new_renderer() {
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
+        let scene = cornell();
+        let target = RenderOptions {
+            algorithm: Algorithm::parse("block_256").unwrap(),
+            patches_n: 5,
+            group_rr: true,
+            compact: false,
+            interleave: 3,
+            whole_group_end: Some(0.5),
+            seed: 9,
+            ..opts(Budget::PathsPerPixel(3))
+        };
+        let (fresh, _) = Renderer::new(&d, &scene, target.clone()).unwrap().render(|_, _| {}).unwrap();
+        let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(2))).unwrap();
+        r.render(|_, _| {}).unwrap();
+        r.reconfigure(target.clone()).unwrap();
+        let (again, _) = r.render(|_, _| {}).unwrap();
+        assert_eq!(again.paths, fresh.paths);
+        assert!(again.pixels.iter().zip(&fresh.pixels).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)), "same image");
+        assert!(r.reconfigure(RenderOptions { size: Some((16, 16)), ..target.clone() }).is_err(), "the size is fixed");
+        assert!(r.reconfigure(RenderOptions { interleave: 2, ..target }).is_err(), "options are checked");
     }
 }
