@@ -8,13 +8,17 @@ use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use cohort::runtime::{BackendKind, Device};
-use cohort_render::{output, Algorithm, Budget, InPatch, RenderOptions, Renderer};
+use cohort_render::{output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer};
 use cohort_scenes::embedded;
 
 mod figures;
 
 #[derive(Parser)]
-#[command(name = "cohort", version, about = "Coherent-ray wavefront path tracer written in the Cohort GPU kernel language")]
+#[command(
+    name = "cohort",
+    version,
+    about = "Coherent-ray wavefront path tracer written in the Cohort GPU kernel language"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -94,6 +98,18 @@ struct RenderArgs {
     /// Skip stream compaction (the paper's `(NO)` variants).
     #[arg(long)]
     no_compact: bool,
+    /// `nee`: next-event estimation (an emitter sample at every non-delta vertex, combined
+    /// with BSDF sampling by MIS, as Mitsuba's `path` integrator does; the meaning of a
+    /// scene's `<integrator type="path">`), or `path`: implicit path tracing (the paper's).
+    #[arg(long, default_value = "nee")]
+    integrator: String,
+    /// Coherent light sampling (with `--integrator nee`): a group shares its light pick
+    /// and one of K x K strata of the light.
+    #[arg(long)]
+    coherent_light: bool,
+    /// K of the K x K light strata of `--coherent-light` (1..=64).
+    #[arg(long, default_value_t = 4)]
+    light_cells: u32,
 }
 
 fn main() -> ExitCode {
@@ -128,7 +144,10 @@ fn load_scene(name: &str) -> Result<cohort_scenes::Scene, String> {
         }
         return Ok(loaded.scene);
     }
-    Err(format!("unknown scene `{name}`: not an embedded scene ({}) nor an XML file", embedded::names().join(", ")))
+    Err(format!(
+        "unknown scene `{name}`: not an embedded scene ({}) nor an XML file",
+        embedded::names().join(", ")
+    ))
 }
 
 fn render(a: RenderArgs) -> Result<(), String> {
@@ -138,7 +157,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
         "uniform" => InPatch::Uniform,
         "cosine" => InPatch::Cosine,
         "equal-area" => InPatch::EqualArea,
-        other => return Err(format!("unknown --in-patch `{other}` (uniform, cosine or equal-area)")),
+        other => {
+            return Err(format!(
+                "unknown --in-patch `{other}` (uniform, cosine or equal-area)"
+            ))
+        }
     };
     let (group_rr, whole_group_end) = match a.rr.as_str() {
         "path" => (false, None),
@@ -146,8 +169,12 @@ fn render(a: RenderArgs) -> Result<(), String> {
         "whole" => (true, Some(a.end_continue)),
         other => return Err(format!("unknown --rr `{other}` (path, group or whole)")),
     };
+    let integrator = IntegratorKind::parse(&a.integrator)
+        .ok_or_else(|| format!("unknown --integrator `{}` (nee or path)", a.integrator))?;
     let budget = match (a.paths, a.time) {
-        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => return Err(format!("--time {t} must be a positive number of seconds")),
+        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
+            return Err(format!("--time {t} must be a positive number of seconds"))
+        }
         (_, Some(t)) => Budget::KernelTime(Duration::from_secs_f64(t)),
         (Some(0), _) => return Err("--paths must be at least 1".into()),
         (Some(p), None) => Budget::PathsPerPixel(p),
@@ -156,11 +183,17 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let scene = load_scene(&a.scene)?;
     let size = match (a.width, a.height) {
         (None, None) => None,
-        (w, h) => Some((w.unwrap_or(scene.camera.width), h.unwrap_or(scene.camera.height))),
+        (w, h) => Some((
+            w.unwrap_or(scene.camera.width),
+            h.unwrap_or(scene.camera.height),
+        )),
     };
     let device = match a.backend.as_deref() {
         None => Device::best(),
-        Some(b) => Device::new(BackendKind::parse(b).ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?),
+        Some(b) => Device::new(
+            BackendKind::parse(b)
+                .ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?,
+        ),
     }
     .map_err(|e| e.to_string())?;
     let info = device.info().clone();
@@ -176,11 +209,21 @@ fn render(a: RenderArgs) -> Result<(), String> {
         size,
         compact: !a.no_compact,
         whole_group_end,
+        integrator,
+        coherent_light: a.coherent_light,
+        light_cells: a.light_cells,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&device, &scene, opts).map_err(|e| e.to_string())?;
     let (w, h) = renderer.size();
-    eprintln!("{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}", a.scene, scene.triangles.len(), info.adapter_name, info.backend.name(), algorithm.name());
+    eprintln!(
+        "{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}",
+        a.scene,
+        scene.triangles.len(),
+        info.adapter_name,
+        info.backend.name(),
+        algorithm.name()
+    );
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
@@ -189,7 +232,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let (image, stats) = renderer
         .render(|frac, s| {
             bar.set_position((frac * 1000.0) as u64);
-            bar.set_message(format!("{:.2} paths/pixel, {} iterations", s.paths_per_pixel(), s.iterations));
+            bar.set_message(format!(
+                "{:.2} paths/pixel, {} iterations",
+                s.paths_per_pixel(),
+                s.iterations
+            ));
         })
         .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
@@ -197,10 +244,19 @@ fn render(a: RenderArgs) -> Result<(), String> {
     output::write_png(&a.png, &image, a.exposure).map_err(|e| e.to_string())?;
     let k = stats.kernel;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    println!("scene          {} ({w}x{h}, {} triangles)", a.scene, scene.triangles.len());
-    println!("device         {} [{}], subgroup {}", info.adapter_name, info.backend.name(), info.subgroup_size);
+    println!(
+        "scene          {} ({w}x{h}, {} triangles)",
+        a.scene,
+        scene.triangles.len()
+    );
+    println!(
+        "device         {} [{}], subgroup {}",
+        info.adapter_name,
+        info.backend.name(),
+        info.subgroup_size
+    );
     let config = format!(
-        "{}{}{}, N = {}, in-patch {}, D = {}",
+        "{}{}{}, N = {}, in-patch {}, D = {}, integrator {}{}",
         algorithm.name(),
         match (group_rr, whole_group_end) {
             (_, Some(q)) => format!("_rr, whole-group end (q = {q})"),
@@ -210,29 +266,59 @@ fn render(a: RenderArgs) -> Result<(), String> {
         if a.no_compact { " (NO)" } else { "" },
         a.n,
         a.in_patch,
-        a.interleave
+        a.interleave,
+        integrator.name(),
+        if a.coherent_light {
+            format!(", coherent light (K = {})", a.light_cells)
+        } else {
+            String::new()
+        }
     );
     println!("algorithm      {config}");
-    println!("paths/pixel    {:.2} ({} paths, {} iterations)", stats.paths_per_pixel(), stats.completed_paths, stats.iterations);
-    println!("kernel time    {:.1} ms: traverse {:.1}, extend {:.1}, compact {:.1}", ms(k.total()), ms(k.traverse), ms(k.extend), ms(k.compact));
-    println!("paths/s        {:.3} M (per kernel second)", stats.paths_per_second() / 1e6);
-    println!("rays/s         {:.3} M (traversal)", stats.rays_per_second() / 1e6);
+    println!(
+        "paths/pixel    {:.2} ({} paths, {} iterations)",
+        stats.paths_per_pixel(),
+        stats.completed_paths,
+        stats.iterations
+    );
+    println!(
+        "kernel time    {:.1} ms: traverse {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
+        ms(k.total()),
+        ms(k.traverse),
+        ms(k.extend),
+        ms(k.shadow),
+        ms(k.compact)
+    );
+    println!(
+        "paths/s        {:.3} M (per kernel second)",
+        stats.paths_per_second() / 1e6
+    );
+    println!(
+        "rays/s         {:.3} M (traversal)",
+        stats.rays_per_second() / 1e6
+    );
     println!("wall           {:.2} s", stats.wall.as_secs_f64());
-    println!("mean radiance  {:.4} {:.4} {:.4}", image.mean().x, image.mean().y, image.mean().z);
+    println!(
+        "mean radiance  {:.4} {:.4} {:.4}",
+        image.mean().x,
+        image.mean().y,
+        image.mean().z
+    );
     println!("wrote          {} and {}", a.out.display(), a.png.display());
     if let Some(path) = &a.stats {
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
-            "compaction": !a.no_compact, "seed": a.seed,
+            "compaction": !a.no_compact, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,
-            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "compact": ms(k.compact), "total": ms(k.total()) },
+            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(),
         });
-        output::write_text(path, &serde_json::to_string_pretty(&json).unwrap()).map_err(|e| e.to_string())?;
+        output::write_text(path, &serde_json::to_string_pretty(&json).unwrap())
+            .map_err(|e| e.to_string())?;
         println!("stats          {}", path.display());
     }
     Ok(())

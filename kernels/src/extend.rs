@@ -7,10 +7,14 @@
 //! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
+use crate::integrator::Integrator;
 use crate::layout::*;
+use crate::light::{area_to_solid_angle, mis_power, pick_light, shared_light_draw, triangle_point};
 use crate::path_end::PathEnd;
 use crate::rng::{hash, stream, uniform};
-use crate::sampling::{cell_point, fresnel_dielectric, ggx_vndf, smith_g1, DiffuseSampler};
+use crate::sampling::{
+    cell_point, fresnel_dielectric, ggx_eval, ggx_vndf, smith_g1, DiffuseSampler,
+};
 use cohort::prelude::*;
 
 /// Camera ray through a random point of `pixel`: origin in xyz (w = tmin), direction.
@@ -22,6 +26,10 @@ pub fn camera_dir(f: &Frame, pixel: u32, key: u32) -> Vec3 {
     let sy = py / f.height as f32;
     (f.cam_forward + f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)).normalize()
 }
+
+/// Path throughput of a fresh camera ray; w is the BSDF-sampling density of the ray's
+/// direction for MIS, 0: a camera ray reaching a light counts in full.
+pub const CAMERA_BETA: Vec4 = Vec4::new(1.0, 1.0, 1.0, 0.0);
 
 /// Starts every slot: first camera ray, empty estimate, identity order.
 #[kernel(workgroup = 64)]
@@ -47,7 +55,7 @@ pub fn init_paths(
     state[g] = UVec4::new(pixel, 0, 0, 0);
     ray_o[g] = Vec4::new(f.cam_origin.x, f.cam_origin.y, f.cam_origin.z, 0.0);
     ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
-    beta[g] = Vec4::ONE;
+    beta[g] = CAMERA_BETA;
     radiance[g] = Vec4::ZERO;
     accum[g] = Vec4::ZERO;
 }
@@ -61,7 +69,8 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 }
 
 #[kernel(workgroup = 64)]
-pub fn extend<S: DiffuseSampler, E: PathEnd>(
+#[allow(clippy::too_many_arguments)]
+pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     #[builtin(global_index)] gi: u32,
     #[builtin(local_index)] li: u32,
     #[workgroup] wg_done: &mut [AtomicU32; 2],
@@ -71,24 +80,38 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
     hits: &[Vec4],
     tris: &[Triangle],
     materials: &[Material],
+    lights: &[LightEntry],
     state: &mut [UVec4],
     ray_o: &mut [Vec4],
     ray_d: &mut [Vec4],
     beta: &mut [Vec4],
     radiance: &mut [Vec4],
     accum: &mut [Vec4],
+    shadow_o: &mut [Vec4],
+    shadow_d: &mut [Vec4],
+    nee: &mut [Vec4],
     flags: &mut [u32],
     completed: &[AtomicU32],
 ) {
     // The group's shared draws come first, in uniform control flow: the patch of
     // coherent sampling and the group's Russian-roulette number.
-    let shared_patch = group_share(|group| S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n));
+    let shared_patch = group_share(|group| {
+        S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n)
+    });
     // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
     let shared_rr = group_share(|group| {
         let k = stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11);
         Vec2::new(uniform(k, 0), uniform(k, 1))
     });
-    let shared_cell = group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
+    let shared_cell =
+        group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
+    // Coherent light sampling: the group's light pick and stratum.
+    let shared_light = group_share(|group| {
+        shared_light_draw(
+            stream(f.seed ^ 0x11c3, group, f.iteration, 0x4a7f),
+            f.light_cells,
+        )
+    });
     // Completed paths are counted per workgroup and added to the global counters once
     // per workgroup: one global atomic per path serialised on a single address.
     if li == 0 {
@@ -109,11 +132,23 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
     let mut l = Vec3::ZERO;
     let mut new_o = Vec3::ZERO;
     let mut new_d = Vec3::ZERO;
+    // Next-event estimation: the BSDF-sampling density of the new direction (0 for a delta
+    // BSDF: a light it reaches is counted in full) and the density with which light
+    // sampling would have drawn that direction towards the environment.
+    let mut bsdf_pdf = 0.0f32;
+    let mut env_pdf = 0.0f32;
+    // The light sample of this vertex: its contribution if unoccluded, and its shadow ray.
+    let mut ld = Vec3::ZERO;
+    let mut sh_o = Vec4::ZERO;
+    let mut sh_d = Vec3::ZERO;
     if gi < count[0] {
         r = idrays[i] as usize;
         let st = state[r];
         if st.w & DONE != 0 {
             flags[i] = 0;
+            if I::NEE {
+                shadow_d[r] = Vec4::new(0.0, 0.0, 0.0, SLOT_IDLE);
+            }
         } else {
             active = true;
             pixel = st.x;
@@ -122,11 +157,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
             let key = stream(f.seed, pixel, path, bounce + 1);
             let h = hits[r];
             let tri = h.w.to_bits();
-            let d = ray_d[r].truncate();
-            thr = beta[r].truncate();
-            l = radiance[r].truncate();
+            let d4 = ray_d[r];
+            let d = d4.truncate();
+            let b4 = beta[r];
+            thr = b4.truncate();
+            let r4 = radiance[r];
+            l = r4.truncate();
             if tri == MISS {
-                l += thr * f.environment;
+                // A direction drawn from a non-delta BSDF (pdf in beta.w; 0 after a camera
+                // ray or a delta bounce) could also have been drawn by light sampling.
+                let mut w = 1.0f32;
+                if I::NEE {
+                    if b4.w > 0.0 {
+                        w = mis_power(b4.w, r4.w);
+                    }
+                }
+                l += thr * f.environment * w;
             } else {
                 let t = tris[tri as usize];
                 let m = materials[t.material as usize];
@@ -136,23 +182,99 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
                 let n = if front { ng } else { -ng };
                 let p = ray_o[r].truncate() + d * h.x;
                 if m.flags & EMITTER != 0 && (front || two_sided) {
-                    l += thr * m.emission;
+                    let mut w = 1.0f32;
+                    if I::NEE {
+                        if b4.w > 0.0 {
+                            w = mis_power(b4.w, area_to_solid_angle(t.light_pdf, h.x, ng.dot(d)));
+                        }
+                    }
+                    l += thr * m.emission * w;
                 }
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
-                if m.kind == DIFFUSE {
-                    if (front || two_sided) && m.color.max_element() > 0.0 {
-                        let s = S::sample(n, u, shared_patch, f.patches_n);
-                        new_d = s.truncate();
-                        thr = thr * m.color * s.w;
-                        new_o = offset_origin(p, n);
-                        alive = true;
+                let diffuse =
+                    m.kind == DIFFUSE && (front || two_sided) && m.color.max_element() > 0.0;
+                let glossy = m.kind == ROUGH_CONDUCTOR;
+                // Light sampling at non-delta vertices, if the depth limit allows one
+                // more vertex (Mitsuba: an emitter sample makes the path one longer).
+                if I::NEE {
+                    let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
+                    if (diffuse || glossy) && room && (f.light_count > 0 || f.env_light > 0.0) {
+                        let mut ul = uniform(key, 6);
+                        let mut up = Vec2::new(uniform(key, 7), uniform(key, 8));
+                        if f.coherent_light != 0 {
+                            ul = shared_light.x;
+                            up = cell_point(shared_light.y.to_bits(), f.light_cells, up);
+                        }
+                        let o = offset_origin(p, n);
+                        let mut wi = Vec3::ZERO;
+                        let mut le = Vec3::ZERO;
+                        let mut light_pdf = 0.0f32;
+                        let mut tmax = 3.0e38f32;
+                        if ul < f.env_light {
+                            wi = crate::sampling::frame(n) * crate::sampling::cosine_hemisphere(up);
+                            light_pdf =
+                                f.env_light * wi.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;
+                            le = f.environment;
+                        } else {
+                            let lt = tris[pick_light(
+                                lights,
+                                f.light_count,
+                                (ul - f.env_light) / (1.0 - f.env_light),
+                            ) as usize];
+                            let lm = materials[lt.material as usize];
+                            let y = triangle_point(lt.v0, lt.v1, lt.v2, up);
+                            let to = y - o;
+                            let dist = to.length();
+                            if dist > 0.0 {
+                                wi = to / dist;
+                                let lng = (lt.v1 - lt.v0).cross(lt.v2 - lt.v0).normalize();
+                                let cos_l = lng.dot(wi);
+                                if cos_l < 0.0 || lm.flags & TWO_SIDED != 0 {
+                                    light_pdf = area_to_solid_angle(lt.light_pdf, dist, cos_l);
+                                    le = lm.emission;
+                                    // Stop short of the light's own surface.
+                                    tmax = dist * (1.0 - 1e-4);
+                                }
+                            }
+                        }
+                        if light_pdf > 0.0 {
+                            // f·cos and the BSDF-sampling density of `wi`.
+                            let fc: Vec3;
+                            let pdf_b: f32;
+                            if diffuse {
+                                let c = wi.dot(n).max(0.0);
+                                fc = m.color * (c * core::f32::consts::FRAC_1_PI);
+                                pdf_b = c * core::f32::consts::FRAC_1_PI;
+                            } else {
+                                let fr = crate::sampling::frame(n);
+                                let e = ggx_eval(fr.transpose() * -d, fr.transpose() * wi, m.param);
+                                fc = m.color * e.x;
+                                pdf_b = e.y;
+                            }
+                            ld = thr * fc * le * (mis_power(light_pdf, pdf_b) / light_pdf);
+                            sh_o = o.extend(tmax);
+                            sh_d = wi;
+                        }
                     }
+                }
+                if diffuse {
+                    let s = S::sample(n, u, shared_patch, f.patches_n);
+                    new_d = s.truncate();
+                    thr = thr * m.color * s.w;
+                    new_o = offset_origin(p, n);
+                    alive = true;
+                    // MIS weights use the cosine density whatever strategy S drew the
+                    // direction: every strategy covers the whole hemisphere (over the
+                    // group's random patch), so any weights that sum to one stay unbiased.
+                    let c = new_d.dot(n).max(0.0);
+                    bsdf_pdf = c * core::f32::consts::FRAC_1_PI;
+                    env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
                 } else if m.kind == CONDUCTOR {
                     new_d = d - n * (2.0 * d.dot(n));
                     thr = thr * m.color;
                     new_o = offset_origin(p, n);
                     alive = true;
-                } else if m.kind == ROUGH_CONDUCTOR {
+                } else if glossy {
                     let fr = crate::sampling::frame(n);
                     let wo = fr.transpose() * -d;
                     // VNDF sampling maps the unit square onto the visible normals preserving
@@ -168,6 +290,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
                         thr = thr * m.color * smith_g1(wi.z, m.param);
                         new_o = offset_origin(p, n);
                         alive = true;
+                        bsdf_pdf = ggx_eval(wo, wi, m.param).y;
+                        env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
                     }
                 } else {
                     // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
@@ -222,11 +346,18 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
             state[r] = UVec4::new(pixel, path, bounce + 1, 0);
             ray_o[r] = new_o.extend(0.0);
             ray_d[r] = new_d.extend(0.0);
-            beta[r] = thr.extend(0.0);
-            radiance[r] = l.extend(0.0);
+            beta[r] = thr.extend(bsdf_pdf);
+            radiance[r] = l.extend(env_pdf);
             flags[i] = 1;
         } else {
-            accum[r] = accum[r] + l.extend(1.0);
+            // With light sampling the shadow pass adds the estimate to the pixel, after
+            // this vertex's light sample.
+            if I::NEE {
+                radiance[r] = l.extend(0.0);
+            } else {
+                accum[r] = accum[r] + l.extend(1.0);
+                radiance[r] = Vec4::ZERO;
+            }
             wg_done[0].fetch_add(1, Ordering::Relaxed);
             let next = path + 1;
             let mut done = 0u32;
@@ -238,9 +369,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd>(
             state[r] = UVec4::new(pixel, next, 0, done);
             ray_o[r] = f.cam_origin.extend(0.0);
             ray_d[r] = cd.extend(0.0);
-            beta[r] = Vec4::ONE;
-            radiance[r] = Vec4::ZERO;
+            beta[r] = CAMERA_BETA;
             flags[i] = 0;
+        }
+        if I::NEE {
+            nee[r] = ld.extend(0.0);
+            shadow_o[r] = sh_o;
+            shadow_d[r] = sh_d.extend(if alive { SLOT_CONTINUES } else { SLOT_ENDED });
         }
     }
     workgroup_barrier();

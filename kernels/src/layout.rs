@@ -28,7 +28,10 @@ pub struct Triangle {
     pub v1: Vec3,
     pub original: u32,
     pub v2: Vec3,
-    pub pad: u32,
+    /// Emitter triangles: the probability that next-event estimation picks this
+    /// triangle, divided by its area (a density per unit area); 0 for the others. The
+    /// scenes crate leaves it 0 (its `pad`); the renderer fills it with the light table.
+    pub light_pdf: f32,
 }
 
 /// Material kinds (`Material::kind`).
@@ -89,12 +92,44 @@ pub struct Frame {
     /// Whole-group termination (`extend::<_, WholeGroup>`): continuation probability of
     /// the roulette a group plays when one of its paths ends.
     pub group_end_continue: f32,
+    /// Next-event estimation: entries of the emitter triangles' alias table (0 = no
+    /// area light).
+    pub light_count: u32,
+    /// Next-event estimation: probability of sampling the environment instead of an
+    /// emitter triangle (0 without an environment, 1 without area lights).
+    pub env_light: f32,
+    /// 1: a coherence group shares its light choice and a stratum of the light
+    /// (`cohort_kernels::light`), as coherent sampling shares a hemisphere patch.
+    pub coherent_light: u32,
+    /// K of the K x K strata of a light's sample domain (coherent light sampling).
+    pub light_cells: u32,
     pub pad0: u32,
     pub pad1: u32,
     pub pad2: u32,
+}
+
+/// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`
+/// uniformly, then take `tri` with probability `prob`, else `alias_tri`. Each emitter
+/// triangle is chosen in proportion to its power (luminance of its radiance x area).
+/// The selection probability divided by the area is in the triangle's `light_pdf`, for
+/// the MIS weight of paths that hit it by BSDF sampling.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct LightEntry {
+    pub tri: u32,
+    pub alias_tri: u32,
+    pub prob: f32,
+    pub pad: u32,
 }
 
 /// `state.w` bits of a ray slot.
 pub const DONE: u32 = 1;
 /// Triangle index of a miss in `hit.w`.
 pub const MISS: u32 = 0xffff_ffff;
+/// `shadow_d.w` of a slot after `extend` with next-event estimation (as f32): what the
+/// shadow pass does with the slot's path.
+pub const SLOT_IDLE: f32 = 0.0;
+/// The path goes on: add the unoccluded light sample to its radiance.
+pub const SLOT_CONTINUES: f32 = 1.0;
+/// The path ended at this vertex: add the light sample, then its estimate to the pixel.
+pub const SLOT_ENDED: f32 = 2.0;

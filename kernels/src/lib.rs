@@ -5,6 +5,8 @@
 //! `traverse` (closest hit of every live ray) → `extend::<S, E>` (shade, sample the next
 //! direction with strategy `S`, or finish the path, as policy `E` says, and regenerate a
 //! camera ray) →
+//! with next-event estimation `trace_shadow*` (occlusion of each vertex's light sample;
+//! adds it, and the estimate of each ended path to its pixel) →
 //! `compact_*` (stable partition of `idrays`: extended rays first, regenerated last).
 //! Path state lives in structure-of-arrays buffers indexed by ray slot; slot `g` belongs
 //! to pixel `slot_pixel[g]` (Morton order), and only `idrays` is ever reordered.
@@ -12,9 +14,12 @@
 pub mod compact;
 pub mod copy;
 pub mod extend;
+pub mod integrator;
 pub mod layout;
+pub mod light;
 pub mod path_end;
 pub mod rng;
 pub mod sampling;
+pub mod shadow;
 pub mod traverse;
 pub mod traverse_wide;

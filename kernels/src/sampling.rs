@@ -78,7 +78,11 @@ pub fn patch_bounds(patch: u32, patches_n: u32, v: f32) -> Vec3 {
     let j = patch % m;
     let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
     let dp = 2.0 * core::f32::consts::PI / m as f32;
-    Vec3::new((i as f32 * dt).cos(), ((i + 1) as f32 * dt).cos(), (j as f32 + v) * dp)
+    Vec3::new(
+        (i as f32 * dt).cos(),
+        ((i + 1) as f32 * dt).cos(),
+        (j as f32 + v) * dp,
+    )
 }
 
 /// Local direction (z up) with polar cosine `cos_t` and azimuth `phi`.
@@ -186,13 +190,43 @@ pub fn smith_g1(cos: f32, alpha: f32) -> f32 {
     2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
 }
 
+/// GGX normal distribution D(m) of a microfacet normal at cosine `cos_m` to the macro
+/// normal.
+#[kernel_fn]
+pub fn ggx_d(cos_m: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let t = cos_m * cos_m * (a2 - 1.0) + 1.0;
+    a2 / (core::f32::consts::PI * t * t)
+}
+
+/// The rough conductor of [`ggx_vndf`] sampling (GGX, separable Smith masking, Fresnel
+/// factor 1 as Mitsuba's `material = none`) for local directions `wo`, `wi` (z up): x =
+/// f·cos divided by the specular reflectance, y = the density with which visible-normal
+/// sampling produces `wi` (G1(wo) D(m) / (4 wo.z)). Zero below either horizon.
+#[kernel_fn]
+pub fn ggx_eval(wo: Vec3, wi: Vec3, alpha: f32) -> Vec2 {
+    let mut r = Vec2::ZERO;
+    if (wo.z > 0.0) & (wi.z > 0.0) {
+        let m = (wo + wi).normalize();
+        let d = ggx_d(m.z, alpha);
+        let g1o = smith_g1(wo.z, alpha);
+        let pdf = g1o * d / (4.0 * wo.z);
+        r = Vec2::new(pdf * smith_g1(wi.z, alpha), pdf);
+    }
+    r
+}
+
 /// GGX visible-normal sampling (Heitz 2018): a microfacet normal for the local
 /// outgoing direction `wo` (z up).
 #[kernel_fn]
 pub fn ggx_vndf(wo: Vec3, alpha: f32, u: Vec2) -> Vec3 {
     let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
     let lensq = vh.x * vh.x + vh.y * vh.y;
-    let t1v = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
+    let t1v = if lensq > 0.0 {
+        Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt()
+    } else {
+        Vec3::X
+    };
     let t2v = vh.cross(t1v);
     let r = u.x.sqrt();
     let phi = 2.0 * core::f32::consts::PI * u.y;

@@ -3,6 +3,8 @@
 //! watertight ray/triangle test (Woop, Benthin & Wald 2013).
 
 use crate::layout::*;
+use crate::shadow::finish_slot;
+use crate::traverse_wide::{AnyHit, Closest, HitQuery};
 use cohort::prelude::*;
 
 /// Entry distance of the ray into a box, or a huge number when it misses within
@@ -13,7 +15,11 @@ pub fn slab(org: Vec3, inv_dir: Vec3, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 
     let t1 = (bmax - org) * inv_dir;
     let near = t0.min(t1).max_element().max(0.0);
     let far = t0.max(t1).min_element().min(tmax) * 1.0000004;
-    if near <= far { near } else { 3.0e38 }
+    if near <= far {
+        near
+    } else {
+        3.0e38
+    }
 }
 
 /// Watertight ray/triangle intersection (Woop, Benthin & Wald 2013) in the ray's
@@ -23,7 +29,18 @@ pub fn slab(org: Vec3, inv_dir: Vec3, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 
 /// (tmin, tmax), else w = 0.
 #[kernel_fn]
 #[allow(clippy::too_many_arguments)]
-pub fn intersect(org: Vec3, px: Vec3, py: Vec3, pz: Vec3, shear: Vec3, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: f32) -> Vec4 {
+pub fn intersect(
+    org: Vec3,
+    px: Vec3,
+    py: Vec3,
+    pz: Vec3,
+    shear: Vec3,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Vec4 {
     let a = v0 - org;
     let b = v1 - org;
     let c = v2 - org;
@@ -69,19 +86,27 @@ pub fn dominant_axis(dir: Vec3) -> u32 {
 /// One-hot vector of axis `k`.
 #[kernel_fn]
 pub fn axis(k: u32) -> Vec3 {
-    Vec3::new((k == 0) as u32 as f32, (k == 1) as u32 as f32, (k == 2) as u32 as f32)
+    Vec3::new(
+        (k == 0) as u32 as f32,
+        (k == 1) as u32 as f32,
+        (k == 2) as u32 as f32,
+    )
 }
 
-/// Traces ray slot `r` through the BVH and writes its closest hit to `hits[r]`:
-/// (t, u, v, triangle index as bits), or w = MISS. Shared by both traversal kernels.
+/// Traces the ray (`org`, `dir`) over (`tmin`, `tmax`) through the BVH2: (t, u, v,
+/// triangle index as bits) of the closest hit (or, for `AnyHit`, of the first found), or
+/// w = MISS.
 #[kernel_fn]
-#[allow(clippy::manual_swap)] // std::mem::swap is not kernel code
-pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[BvhNode], tris: &[Triangle], hits: &mut [Vec4]) {
-    let ri = r as usize;
-    let o4 = ray_o[ri];
-    let org = o4.truncate();
-    let dir = ray_d[ri].truncate();
-    let tmin = o4.w;
+#[allow(clippy::manual_swap, clippy::too_many_arguments)] // std::mem::swap is not kernel code
+pub fn trace2<Q: HitQuery>(
+    org: Vec3,
+    dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+    f: &Frame,
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+) -> Vec4 {
     let inv = dir.recip();
     let kz = dominant_axis(dir);
     let kx = (kz + 1) % 3;
@@ -91,7 +116,7 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
     let pz = axis(kz);
     let dz = dir.dot(pz);
     let shear = Vec3::new(dir.dot(px) / dz, dir.dot(py) / dz, 1.0 / dz);
-    let mut best_t = 3.0e38f32;
+    let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
     let mut stack = [0u32; 64];
     let mut sp = 0usize;
@@ -120,6 +145,10 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
                         if h.w != 0.0 {
                             best_t = h.x;
                             best = Vec4::new(h.x, h.y, h.z, f32::from_bits(k));
+                            if Q::ANY {
+                                go = false;
+                                break;
+                            }
                         }
                     }
                 } else if next_a == 0xffff_ffff {
@@ -129,6 +158,13 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
                     next_b = child;
                     tb = tc;
                 }
+            }
+        }
+        if Q::ANY {
+            if !go {
+                next_a = 0xffff_ffff;
+                next_b = 0xffff_ffff;
+                sp = 0;
             }
         }
         if (next_a != 0xffff_ffff) & (next_b != 0xffff_ffff) {
@@ -149,7 +185,32 @@ pub fn trace_ray(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Bvh
             go = false;
         }
     }
-    hits[ri] = best;
+    best
+}
+
+/// Traces ray slot `r` through the BVH and writes its closest hit to `hits[r]`:
+/// (t, u, v, triangle index as bits), or w = MISS. Shared by both traversal kernels.
+#[kernel_fn]
+pub fn trace_ray(
+    r: u32,
+    f: &Frame,
+    ray_o: &[Vec4],
+    ray_d: &[Vec4],
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    hits: &mut [Vec4],
+) {
+    let ri = r as usize;
+    let o4 = ray_o[ri];
+    hits[ri] = trace2::<Closest>(
+        o4.truncate(),
+        ray_d[ri].truncate(),
+        o4.w,
+        3.0e38,
+        f,
+        nodes,
+        tris,
+    );
 }
 
 /// Closest hit of every live ray. `hits[r]` = (t, u, v, triangle index as bits), or
@@ -211,6 +272,41 @@ pub fn traverse_persistent(
         let r = idrays[i as usize];
         if state[r as usize].w & DONE == 0 {
             trace_ray(r, f, ray_o, ray_d, nodes, tris, hits);
+        }
+    }
+}
+
+/// The shadow pass of next-event estimation over the BVH2 (trees too deep for the 8-wide
+/// kernel's stack): as `crate::traverse_wide::trace_shadow8`.
+#[kernel(workgroup = 64)]
+#[allow(clippy::too_many_arguments)]
+pub fn trace_shadow(
+    #[builtin(global_index)] gi: u32,
+    f: &Frame,
+    count: &[u32],
+    idrays: &[u32],
+    shadow_o: &[Vec4],
+    shadow_d: &[Vec4],
+    nee: &[Vec4],
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    radiance: &mut [Vec4],
+    accum: &mut [Vec4],
+) {
+    if gi < count[0] {
+        let r = idrays[gi as usize] as usize;
+        let d = shadow_d[r];
+        if d.w != SLOT_IDLE {
+            let ld = nee[r].truncate();
+            let mut visible = false;
+            if ld != Vec3::ZERO {
+                let o = shadow_o[r];
+                visible = trace2::<AnyHit>(o.truncate(), d.truncate(), 0.0, o.w, f, nodes, tris)
+                    .w
+                    .to_bits()
+                    == MISS;
+            }
+            finish_slot(r as u32, d.w, ld, visible, radiance, accum);
         }
     }
 }

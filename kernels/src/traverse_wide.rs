@@ -8,6 +8,7 @@
 //! slab ends ordered by the sign of the inverse direction instead of a min/max.
 
 use crate::layout::*;
+use crate::shadow::finish_slot;
 use crate::traverse::{axis, dominant_axis, intersect};
 use cohort::prelude::*;
 
@@ -51,9 +52,19 @@ pub fn hit4(org: Vec3, inv: Vec3, neg: UVec3, n: WideNode, tmax: f32) -> u32 {
     let ix = Vec4::splat(inv.x);
     let iy = Vec4::splat(inv.y);
     let iz = Vec4::splat(inv.z);
-    let near = ((ax - ox) * ix).max((ay - oy) * iy).max((az - oz) * iz).max(Vec4::ZERO);
-    let far = ((bx - ox) * ix).min((by - oy) * iy).min((bz - oz) * iz).min(Vec4::splat(tmax)) * Vec4::splat(1.0000004);
-    (near.x <= far.x) as u32 | ((near.y <= far.y) as u32) << 1 | ((near.z <= far.z) as u32) << 2 | ((near.w <= far.w) as u32) << 3
+    let near = ((ax - ox) * ix)
+        .max((ay - oy) * iy)
+        .max((az - oz) * iz)
+        .max(Vec4::ZERO);
+    let far = ((bx - ox) * ix)
+        .min((by - oy) * iy)
+        .min((bz - oz) * iz)
+        .min(Vec4::splat(tmax))
+        * Vec4::splat(1.0000004);
+    (near.x <= far.x) as u32
+        | ((near.y <= far.y) as u32) << 1
+        | ((near.z <= far.z) as u32) << 2
+        | ((near.w <= far.w) as u32) << 3
 }
 
 /// Child reference of slot `s` (0..8) of the node whose records hold `a` and `b`.
@@ -63,7 +74,11 @@ pub fn pick(a: UVec4, b: UVec4, s: u32) -> u32 {
     let odd = (s & 1) != 0;
     let lo = if odd { c.y } else { c.x };
     let hi = if odd { c.w } else { c.z };
-    if (s & 2) != 0 { hi } else { lo }
+    if (s & 2) != 0 {
+        hi
+    } else {
+        lo
+    }
 }
 
 /// Moves bit `s` of an 8-bit mask to bit `s ^ oct`.
@@ -82,15 +97,39 @@ pub fn permute8(m: u32, oct: u32) -> u32 {
     r
 }
 
-/// Traces ray slot `r` through the 8-wide BVH and writes its closest hit to `hits[r]`:
-/// (t, u, v, triangle index as bits), or w = MISS.
+/// What a traversal looks for, decided when the kernel is built (an associated constant,
+/// so the closest-hit kernel contains no early exit).
+pub trait HitQuery: 'static {
+    /// Stop at the first hit within (tmin, tmax): occlusion (shadow) rays.
+    const ANY: bool;
+}
+
+/// The closest hit (path rays).
+pub struct Closest;
+impl HitQuery for Closest {
+    const ANY: bool = false;
+}
+
+/// Any hit, with early exit (shadow rays of light sampling).
+pub struct AnyHit;
+impl HitQuery for AnyHit {
+    const ANY: bool = true;
+}
+
+/// Traces the ray (`org`, `dir`) over (`tmin`, `tmax`) through the 8-wide BVH: (t, u, v,
+/// triangle index as bits) of the closest hit (or, for [`AnyHit`], of the first found),
+/// or w = MISS.
 #[kernel_fn]
-pub fn trace_ray8(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[WideNode], tris: &[Triangle], hits: &mut [Vec4]) {
-    let ri = r as usize;
-    let o4 = ray_o[ri];
-    let org = o4.truncate();
-    let dir = ray_d[ri].truncate();
-    let tmin = o4.w;
+#[allow(clippy::too_many_arguments)]
+pub fn trace8<Q: HitQuery>(
+    org: Vec3,
+    dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+    f: &Frame,
+    nodes: &[WideNode],
+    tris: &[Triangle],
+) -> Vec4 {
     let inv = dir.recip();
     let kz = dominant_axis(dir);
     let kx = (kz + 1) % 3;
@@ -100,11 +139,15 @@ pub fn trace_ray8(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Wi
     let pz = axis(kz);
     let dz = dir.dot(pz);
     let shear = Vec3::new(dir.dot(px) / dz, dir.dot(py) / dz, 1.0 / dz);
-    let neg = UVec3::new((inv.x < 0.0) as u32, (inv.y < 0.0) as u32, (inv.z < 0.0) as u32);
+    let neg = UVec3::new(
+        (inv.x < 0.0) as u32,
+        (inv.y < 0.0) as u32,
+        (inv.z < 0.0) as u32,
+    );
     let oct = neg.x | (neg.y << 1) | (neg.z << 2);
     // Byte `oct & 3` of meta.x (octants 0..3) or meta.y (4..7).
     let meta_shift = (oct & 3) * 8;
-    let mut best_t = 3.0e38f32;
+    let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
     let mut stack = [0u32; STACK_SIZE];
     let mut sp = 0usize;
@@ -132,7 +175,18 @@ pub fn trace_ray8(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Wi
                 if h.w != 0.0 {
                     best_t = h.x;
                     best = Vec4::new(h.x, h.y, h.z, f32::from_bits(k));
+                    if Q::ANY {
+                        leaves = 0;
+                        go = false;
+                        break;
+                    }
                 }
+            }
+        }
+        if Q::ANY {
+            if !go {
+                inner = 0;
+                sp = 0;
             }
         }
         if inner != 0 {
@@ -153,7 +207,32 @@ pub fn trace_ray8(r: u32, f: &Frame, ray_o: &[Vec4], ray_d: &[Vec4], nodes: &[Wi
             go = false;
         }
     }
-    hits[ri] = best;
+    best
+}
+
+/// Traces ray slot `r` through the 8-wide BVH and writes its closest hit to `hits[r]`:
+/// (t, u, v, triangle index as bits), or w = MISS.
+#[kernel_fn]
+pub fn trace_ray8(
+    r: u32,
+    f: &Frame,
+    ray_o: &[Vec4],
+    ray_d: &[Vec4],
+    nodes: &[WideNode],
+    tris: &[Triangle],
+    hits: &mut [Vec4],
+) {
+    let ri = r as usize;
+    let o4 = ray_o[ri];
+    hits[ri] = trace8::<Closest>(
+        o4.truncate(),
+        ray_d[ri].truncate(),
+        o4.w,
+        3.0e38,
+        f,
+        nodes,
+        tris,
+    );
 }
 
 /// Closest hit of every live ray through the 8-wide BVH: a drop-in for
@@ -181,4 +260,40 @@ pub fn traverse8(
         return;
     }
     trace_ray8(r as u32, f, ray_o, ray_d, nodes, tris, hits);
+}
+
+/// The shadow pass of next-event estimation over the 8-wide BVH: for every live slot,
+/// trace its light sample's shadow ray (any hit, early exit) and finish the slot
+/// (`crate::shadow::finish_slot`).
+#[kernel(workgroup = 64)]
+#[allow(clippy::too_many_arguments)]
+pub fn trace_shadow8(
+    #[builtin(global_index)] gi: u32,
+    f: &Frame,
+    count: &[u32],
+    idrays: &[u32],
+    shadow_o: &[Vec4],
+    shadow_d: &[Vec4],
+    nee: &[Vec4],
+    nodes: &[WideNode],
+    tris: &[Triangle],
+    radiance: &mut [Vec4],
+    accum: &mut [Vec4],
+) {
+    if gi < count[0] {
+        let r = idrays[gi as usize] as usize;
+        let d = shadow_d[r];
+        if d.w != SLOT_IDLE {
+            let ld = nee[r].truncate();
+            let mut visible = false;
+            if ld != Vec3::ZERO {
+                let o = shadow_o[r];
+                visible = trace8::<AnyHit>(o.truncate(), d.truncate(), 0.0, o.w, f, nodes, tris)
+                    .w
+                    .to_bits()
+                    == MISS;
+            }
+            finish_slot(r as u32, d.w, ld, visible, radiance, accum);
+        }
+    }
 }

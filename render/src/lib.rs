@@ -5,9 +5,13 @@
 
 pub mod gpu_scene;
 pub mod image;
+pub mod lights;
 pub mod output;
 pub mod renderer;
 
 pub use gpu_scene::GpuScene;
 pub use image::Image;
-pub use renderer::{Algorithm, Budget, InPatch, KernelTimes, RenderError, RenderOptions, RenderStats, Renderer};
+pub use renderer::{
+    Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
+    RenderStats, Renderer,
+};

@@ -10,15 +10,18 @@
 
 use std::time::{Duration, Instant};
 
-use cohort::runtime::{Device, DispatchStats, GpuBuffer, RuntimeError};
+use cohort::runtime::{Batch, Device, DispatchStats, GpuBuffer, ReadBack, RuntimeError, Submission};
 use cohort::Group;
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
+use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
-use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
-use cohort_kernels::traverse::traverse;
-use cohort_kernels::traverse_wide::traverse8;
+use cohort_kernels::sampling::{
+    CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
+};
+use cohort_kernels::traverse::{trace_shadow, traverse};
+use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_scenes::{morton_pixel_order, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
@@ -34,7 +37,10 @@ pub struct Algorithm {
 }
 
 impl Algorithm {
-    pub const NORMAL: Algorithm = Algorithm { group: Group::Thread, coherent: false };
+    pub const NORMAL: Algorithm = Algorithm {
+        group: Group::Thread,
+        coherent: false,
+    };
 
     /// `normal`, `warp`, `block_256`, `block_512`, `block_1024`, `grid` (and any
     /// `block_N` with N a multiple of 32 up to 1024).
@@ -46,7 +52,10 @@ impl Algorithm {
         match group {
             Group::Thread => None,
             Group::Block(n) if n % 32 != 0 => None,
-            _ => Some(Algorithm { group, coherent: true }),
+            _ => Some(Algorithm {
+                group,
+                coherent: true,
+            }),
         }
     }
 
@@ -68,6 +77,32 @@ pub enum InPatch {
     Cosine,
     /// Equal-area patches through the Shirley–Chiu concentric map (beyond the paper).
     EqualArea,
+}
+
+/// The light transport estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Implicit path tracing: a path contributes only when it reaches an emitter (the
+    /// paper's renderer).
+    Path,
+    /// Next-event estimation with MIS (Mitsuba's `path` integrator).
+    Nee,
+}
+
+impl IntegratorKind {
+    pub fn parse(s: &str) -> Option<IntegratorKind> {
+        match s {
+            "path" => Some(IntegratorKind::Path),
+            "nee" => Some(IntegratorKind::Nee),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Path => "path",
+            IntegratorKind::Nee => "nee",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -102,6 +137,13 @@ pub struct RenderOptions {
     /// group's other paths play one shared roulette with this continuation probability
     /// (`cohort_kernels::path_end`). `None`: paths end one by one. Needs warp or block groups.
     pub whole_group_end: Option<f32>,
+    /// Implicit path tracing or next-event estimation.
+    pub integrator: IntegratorKind,
+    /// Coherent light sampling (beyond the paper): a group shares its light pick and a
+    /// stratum of the light (`cohort_kernels::light`). Needs `integrator: Nee`.
+    pub coherent_light: bool,
+    /// K of the K x K strata of coherent light sampling (1..=64).
+    pub light_cells: u32,
 }
 
 impl Default for RenderOptions {
@@ -119,6 +161,9 @@ impl Default for RenderOptions {
             compact: true,
             rr_continue: 0.8,
             whole_group_end: None,
+            integrator: IntegratorKind::Path,
+            coherent_light: false,
+            light_cells: 4,
         }
     }
 }
@@ -139,12 +184,37 @@ pub enum RenderError {
 pub struct KernelTimes {
     pub traverse: Duration,
     pub extend: Duration,
+    /// The shadow pass of next-event estimation.
+    pub shadow: Duration,
     pub compact: Duration,
 }
 impl KernelTimes {
     pub fn total(&self) -> Duration {
-        self.traverse + self.extend + self.compact
+        self.traverse + self.extend + self.shadow + self.compact
     }
+    /// Adds `t` to the time of `stage`.
+    fn add(&mut self, stage: Stage, t: Duration) {
+        match stage {
+            Stage::Traverse => self.traverse += t,
+            Stage::Extend => self.extend += t,
+            Stage::Shadow => self.shadow += t,
+            Stage::Compact => self.compact += t,
+        }
+    }
+}
+
+/// The stages of one iteration, in order; every dispatch is labelled with its stage so
+/// that timings are summed by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    /// Closest hit of every live ray.
+    Traverse,
+    /// Shade, sample lights and the next direction, end or continue paths.
+    Extend,
+    /// Occlusion of the light samples; finish the slots (next-event estimation only).
+    Shadow,
+    /// Stable partition of the live rays.
+    Compact,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -182,6 +252,11 @@ struct Paths {
     radiance: GpuBuffer<Vec4>,
     hits: GpuBuffer<Vec4>,
     accum: GpuBuffer<Vec4>,
+    /// Next-event estimation: each slot's shadow ray (origin, tmax), (direction, status)
+    /// and unoccluded light-sample contribution.
+    shadow_o: GpuBuffer<Vec4>,
+    shadow_d: GpuBuffer<Vec4>,
+    nee: GpuBuffer<Vec4>,
     flags: GpuBuffer<u32>,
     count: GpuBuffer<u32>,
     block_sums: GpuBuffer<u32>,
@@ -213,19 +288,37 @@ struct Run {
     per_iteration: Option<f64>,
 }
 
+/// A submitted batch of iterations and what its results are read into.
+struct Pending<'d> {
+    submission: Submission<'d>,
+    /// The stage of each dispatch, in order.
+    stages: Vec<Stage>,
+    iterations: u32,
+    counters: ReadBack<u32>,
+}
+
 fn ns(s: &DispatchStats) -> Duration {
     Duration::from_nanos(s.gpu_time_ns.unwrap_or(0))
 }
 
 impl<'d> Renderer<'d> {
-    pub fn new(device: &'d Device, scene: &Scene, opts: RenderOptions) -> Result<Self, RenderError> {
+    pub fn new(
+        device: &'d Device,
+        scene: &Scene,
+        opts: RenderOptions,
+    ) -> Result<Self, RenderError> {
         let gpu = GpuScene::prepare(device, scene)?;
         Self::with_scene(device, scene, gpu, opts)
     }
 
     /// A renderer over a scene already on the device (built once with
     /// `GpuScene::prepare`, shared by many renders, e.g. the points of a sweep).
-    pub fn with_scene(device: &'d Device, scene: &Scene, gpu: std::sync::Arc<GpuScene>, opts: RenderOptions) -> Result<Self, RenderError> {
+    pub fn with_scene(
+        device: &'d Device,
+        scene: &Scene,
+        gpu: std::sync::Arc<GpuScene>,
+        opts: RenderOptions,
+    ) -> Result<Self, RenderError> {
         let mut camera = scene.camera;
         if let Some((w, h)) = opts.size {
             if w == 0 || h == 0 {
@@ -237,7 +330,9 @@ impl<'d> Renderer<'d> {
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         if n > (1 << 26) {
-            return Err(RenderError::Options(format!("image size {w}x{h} is larger than this renderer supports (2^26 pixels)")));
+            return Err(RenderError::Options(format!(
+                "image size {w}x{h} is larger than this renderer supports (2^26 pixels)"
+            )));
         }
         validate(&opts, w, h)?;
         let f = camera.frame();
@@ -254,6 +349,8 @@ impl<'d> Renderer<'d> {
             rr_depth: 0,
             has_geometry: (gpu.triangle_count > 0) as u32,
             iteration: 0,
+            light_count: gpu.light_count,
+            env_light: gpu.env_light,
             ..Default::default()
         };
         apply_options(&mut frame, &opts);
@@ -270,13 +367,24 @@ impl<'d> Renderer<'d> {
             radiance: device.alloc(n)?,
             hits: device.alloc(n)?,
             accum: device.alloc(n)?,
+            shadow_o: device.alloc(n)?,
+            shadow_d: device.alloc(n)?,
+            nee: device.alloc(n)?,
             flags: device.alloc(n)?,
             count: device.upload(&[n as u32])?,
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
         };
-        Ok(Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts, run: None })
+        Ok(Renderer {
+            device,
+            scene: gpu,
+            frame,
+            paths,
+            slot_to_pixel,
+            opts,
+            run: None,
+        })
     }
 
     /// Takes new options for the next run, keeping the scene, the image size and every
@@ -287,13 +395,17 @@ impl<'d> Renderer<'d> {
         let (w, h) = self.size();
         if let Some(size) = opts.size {
             if size != (w, h) {
-                return Err(RenderError::Options(format!("reconfigure cannot change the image size {w}x{h} to {}x{}", size.0, size.1)));
+                return Err(RenderError::Options(format!(
+                    "reconfigure cannot change the image size {w}x{h} to {}x{}",
+                    size.0, size.1
+                )));
             }
         }
         validate(&opts, w, h)?;
         if opts.interleave != self.opts.interleave {
             self.slot_to_pixel = slot_order(w, h, opts.interleave);
-            self.device.write(&self.paths.slot_pixel, 0, &self.slot_to_pixel)?;
+            self.device
+                .write(&self.paths.slot_pixel, 0, &self.slot_to_pixel)?;
         }
         apply_options(&mut self.frame, &opts);
         self.opts = opts;
@@ -319,7 +431,10 @@ impl<'d> Renderer<'d> {
     /// Renders until the budget is spent. `progress` receives the fraction done.
     /// The same as [`start`](Self::start), [`advance_with`](Self::advance_with) to the
     /// options' budget, then [`image`](Self::image).
-    pub fn render(&mut self, progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+    pub fn render(
+        &mut self,
+        progress: impl FnMut(f64, &RenderStats),
+    ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
         let stats = self.advance_with(self.opts.budget, progress)?;
         Ok((self.image()?, stats))
@@ -327,7 +442,10 @@ impl<'d> Renderer<'d> {
 
     /// Renders with a user's diffuse sampling strategy `S` at the options' group level
     /// (see `examples/custom_sampler.rs`).
-    pub fn render_custom<S: DiffuseSampler>(&mut self, mut progress: impl FnMut(f64, &RenderStats)) -> Result<(Image, RenderStats), RenderError> {
+    pub fn render_custom<S: DiffuseSampler>(
+        &mut self,
+        mut progress: impl FnMut(f64, &RenderStats),
+    ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
         let stats = self.advance_sampled::<S>(self.opts.budget, &mut progress)?;
         Ok((self.image()?, stats))
@@ -343,11 +461,33 @@ impl<'d> Renderer<'d> {
         let p = &self.paths;
         let n = self.frame.slots;
         let spec_init = init_paths::spec(d, None);
-        init_paths::launch_spec(d, &spec_init, n, &self.frame, &p.slot_pixel, &p.idrays[0], &p.state, &p.ray_o, &p.ray_d, &p.beta, &p.radiance, &p.accum)?;
+        init_paths::launch_spec(
+            d,
+            &spec_init,
+            n,
+            &self.frame,
+            &p.slot_pixel,
+            &p.idrays[0],
+            &p.state,
+            &p.ray_o,
+            &p.ray_d,
+            &p.beta,
+            &p.radiance,
+            &p.accum,
+        )?;
         // A renderer can run again: each run starts from scratch.
         d.write(&p.counters, 0, &[0, 0])?;
-        let stats = RenderStats { pixels: n as u64, wall: started.elapsed(), ..Default::default() };
-        self.run = Some(Run { stats, cur: 0, live: n as u64, per_iteration: None });
+        let stats = RenderStats {
+            pixels: n as u64,
+            wall: started.elapsed(),
+            ..Default::default()
+        };
+        self.run = Some(Run {
+            stats,
+            cur: 0,
+            live: n as u64,
+            per_iteration: None,
+        });
         Ok(())
     }
 
@@ -362,24 +502,45 @@ impl<'d> Renderer<'d> {
     }
 
     /// [`advance`](Self::advance) with `progress` receiving the fraction of `until` done.
-    pub fn advance_with(&mut self, until: Budget, mut progress: impl FnMut(f64, &RenderStats)) -> Result<RenderStats, RenderError> {
+    pub fn advance_with(
+        &mut self,
+        until: Budget,
+        mut progress: impl FnMut(f64, &RenderStats),
+    ) -> Result<RenderStats, RenderError> {
         match (self.opts.algorithm.coherent, self.opts.in_patch) {
             (false, _) => self.advance_sampled::<Cosine>(until, &mut progress),
-            (true, InPatch::Uniform) => self.advance_sampled::<CoherentUniform>(until, &mut progress),
+            (true, InPatch::Uniform) => {
+                self.advance_sampled::<CoherentUniform>(until, &mut progress)
+            }
             (true, InPatch::Cosine) => self.advance_sampled::<CoherentCosine>(until, &mut progress),
-            (true, InPatch::EqualArea) => self.advance_sampled::<CoherentEqualArea>(until, &mut progress),
+            (true, InPatch::EqualArea) => {
+                self.advance_sampled::<CoherentEqualArea>(until, &mut progress)
+            }
         }
     }
 
-    fn advance_sampled<S: DiffuseSampler>(&mut self, until: Budget, progress: &mut dyn FnMut(f64, &RenderStats)) -> Result<RenderStats, RenderError> {
-        if self.opts.whole_group_end.is_some() {
-            self.advance_ended_by::<S, WholeGroup>(until, progress)
-        } else {
-            self.advance_ended_by::<S, EachPath>(until, progress)
+    fn advance_sampled<S: DiffuseSampler>(
+        &mut self,
+        until: Budget,
+        progress: &mut dyn FnMut(f64, &RenderStats),
+    ) -> Result<RenderStats, RenderError> {
+        match (self.opts.whole_group_end.is_some(), self.opts.integrator) {
+            (true, IntegratorKind::Path) => {
+                self.advance_kernels::<S, WholeGroup, Implicit>(until, progress)
+            }
+            (false, IntegratorKind::Path) => {
+                self.advance_kernels::<S, EachPath, Implicit>(until, progress)
+            }
+            (true, IntegratorKind::Nee) => {
+                self.advance_kernels::<S, WholeGroup, NextEvent>(until, progress)
+            }
+            (false, IntegratorKind::Nee) => {
+                self.advance_kernels::<S, EachPath, NextEvent>(until, progress)
+            }
         }
     }
 
-    fn advance_ended_by<S: DiffuseSampler, E: PathEnd>(
+    fn advance_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &mut self,
         until: Budget,
         progress: &mut dyn FnMut(f64, &RenderStats),
@@ -389,7 +550,9 @@ impl<'d> Renderer<'d> {
         let p = &self.paths;
         let n = self.frame.slots;
         let Some(run) = self.run.as_mut() else {
-            return Err(RenderError::Options("advance before start: a run must be started first".into()));
+            return Err(RenderError::Options(
+                "advance before start: a run must be started first".into(),
+            ));
         };
         let done = |stats: &RenderStats| match until {
             Budget::PathsPerPixel(pp) => stats.completed_paths as f64 / (pp as f64 * n as f64),
@@ -401,119 +564,85 @@ impl<'d> Renderer<'d> {
             progress(1.0, &run.stats);
             return Ok(run.stats.clone());
         }
-        let spec_t = traverse::spec(d, None);
-        let spec_t8 = traverse8::spec(d, None);
-        let spec_e = extend::spec(d, Some(self.opts.algorithm.group));
-        let spec_c = compact::specs(d);
+        let specs = Specs {
+            traverse: traverse::spec(d, None),
+            traverse8: traverse8::spec(d, None),
+            extend: extend::spec(d, Some(self.opts.algorithm.group)),
+            shadow: trace_shadow::spec(d, None),
+            shadow8: trace_shadow8::spec(d, None),
+            compact: compact::specs(d),
+        };
         let wall_before = run.stats.wall;
-        // Several iterations go into one submission, and the host reads the counters
-        // once per submission: with one submission and one read-back per iteration the
-        // GPU idles between iterations, and the driver lowers its clocks (seen on the
-        // H200: 1980 MHz fell to 705 MHz over a sweep, with "idle" as the reason).
-        let per_iteration = 2 + if self.opts.compact { compact::DISPATCHES } else { 0 };
+        // Several iterations go into one submission (about 10 ms of GPU work), and two
+        // submissions are kept in flight: the host records and submits the next while the
+        // GPU runs the current one, and reads each submission's counters through a copy
+        // in that same submission. The GPU never waits for the host: an idle GPU also
+        // lowers its clocks (1980 -> 345 MHz on the H100 and H200, reason "idle").
         const TARGET_SUBMIT: Duration = Duration::from_millis(10);
+        const IN_FLIGHT: usize = 2;
+        let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
-            let stats = &mut run.stats;
-            // Aim at about 10 ms of GPU work per submission, without overshooting a time
-            // budget by more than a tenth of what is left. The first submission of a run
-            // is one iteration, to measure one.
-            let batch_iterations = match run.per_iteration {
-                None => 1,
-                Some(per_iter) => {
-                    let mut want = (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
-                    match until {
-                        Budget::KernelTime(t) => {
-                            let left = (t.as_secs_f64() - stats.kernel.total().as_secs_f64()).max(0.0);
-                            want = want.min((0.1 * left / per_iter.max(1e-7)).max(1.0));
+            // Submit while fewer than IN_FLIGHT batches run and what is known (finished
+            // batches, plus the estimated time of those in flight) leaves budget.
+            while in_flight.len() < IN_FLIGHT {
+                let queued: u32 = in_flight.iter().map(|q| q.iterations).sum();
+                let stats = &run.stats;
+                let projected_time = stats.kernel.total().as_secs_f64() + run.per_iteration.unwrap_or(0.0) * queued as f64;
+                let projected = match until {
+                    Budget::KernelTime(t) => projected_time / t.as_secs_f64(),
+                    Budget::PathsPerPixel(_) => done(stats),
+                };
+                let fresh = stats.iterations == 0 && in_flight.is_empty();
+                if !fresh && (projected >= 1.0 || run.live == 0) {
+                    break;
+                }
+                // The first submission of a run is one iteration, to measure one; until
+                // then nothing else is queued.
+                let batch_iterations = match run.per_iteration {
+                    None if !in_flight.is_empty() => break,
+                    None => 1,
+                    Some(per_iter) => {
+                        let mut want = (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
+                        match until {
+                            // Do not overshoot a time budget by more than a tenth of what is left.
+                            Budget::KernelTime(t) => want = want.min((0.1 * (t.as_secs_f64() - projected_time).max(0.0) / per_iter.max(1e-7)).max(1.0)),
+                            // Every path needs a few iterations; finish in small steps near the end.
+                            Budget::PathsPerPixel(_) => want = want.min(((1.0 - projected.min(1.0)) * 200.0).max(1.0)),
                         }
-                        // Every path needs a few iterations; finish in small steps near the end.
-                        Budget::PathsPerPixel(_) => want = want.min(((1.0 - done(stats).min(1.0)) * 200.0).max(1.0)),
+                        want as u32
                     }
-                    want as u32
+                };
+                let mut b = d.batch();
+                let mut stages = Vec::new();
+                for k in 0..batch_iterations {
+                    self.frame.iteration = run.stats.iterations + queued + k;
+                    run.cur = record_iteration::<S, E, I>(&mut b, &specs, &self.frame, &self.scene, p, run.cur, self.opts.compact, &mut stages)?;
                 }
+                let counters = b.read_back(&p.counters)?;
+                in_flight.push_back(Pending { submission: b.submit_async()?, stages, iterations: batch_iterations, counters });
+            }
+            let Some(oldest) = in_flight.pop_front() else {
+                // Nothing left to submit or wait for: the budget is reached.
+                run.stats.wall = wall_before + resumed.elapsed();
+                return Ok(run.stats.clone());
             };
-            let mut b = d.batch();
-            for _ in 0..batch_iterations {
-                self.frame.iteration = stats.iterations;
-                let cur = run.cur;
-                // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep
-                // for its stack.
-                match &self.scene.nodes8 {
-                    Some(n8) => traverse8::record(
-                        &mut b,
-                        &spec_t8,
-                        n,
-                        &self.frame,
-                        &p.count,
-                        &p.idrays[cur],
-                        &p.state,
-                        &p.ray_o,
-                        &p.ray_d,
-                        n8,
-                        &self.scene.triangles,
-                        &p.hits,
-                    )?,
-                    None => traverse::record(
-                        &mut b,
-                        &spec_t,
-                        n,
-                        &self.frame,
-                        &p.count,
-                        &p.idrays[cur],
-                        &p.state,
-                        &p.ray_o,
-                        &p.ray_d,
-                        &self.scene.nodes,
-                        &self.scene.triangles,
-                        &p.hits,
-                    )?,
-                }
-                extend::record::<S, E>(
-                    &mut b,
-                    &spec_e,
-                    n,
-                    &self.frame,
-                    &p.count,
-                    &p.idrays[cur],
-                    &p.hits,
-                    &self.scene.triangles,
-                    &self.scene.materials,
-                    &p.state,
-                    &p.ray_o,
-                    &p.ray_d,
-                    &p.beta,
-                    &p.radiance,
-                    &p.accum,
-                    &p.flags,
-                    &p.counters,
-                )?;
-                if self.opts.compact {
-                    compact::record(&mut b, &spec_c, n, &p.count, &p.flags, &p.block_sums, &p.total, &p.idrays[cur], &p.idrays[1 - cur])?;
-                    run.cur = 1 - cur;
-                }
-                stats.iterations += 1;
-                // Slots that finished inside this submission are counted as live until
-                // the next read-back: an upper bound on the rays traced.
-                stats.rays += run.live;
-            }
-            let times = b.submit()?;
+            let completed = oldest.submission.wait()?;
+            let stats = &mut run.stats;
             let mut batch_time = Duration::ZERO;
-            for it in times.chunks(per_iteration) {
-                stats.kernel.traverse += ns(&it[0]);
-                stats.kernel.extend += ns(&it[1]);
-                stats.kernel.compact += it[2..].iter().map(ns).sum::<Duration>();
-                batch_time += it.iter().map(ns).sum::<Duration>();
+            for (stage, t) in oldest.stages.iter().zip(&completed.stats) {
+                stats.kernel.add(*stage, ns(t));
+                batch_time += ns(t);
             }
-            run.per_iteration = Some(batch_time.as_secs_f64() / batch_iterations as f64);
-            let counters = d.read(&p.counters)?;
+            run.per_iteration = Some(batch_time.as_secs_f64() / oldest.iterations as f64);
+            stats.iterations += oldest.iterations;
+            // Slots that finished inside a submission are counted as live until its
+            // read-back: an upper bound on the rays traced.
+            stats.rays += run.live * oldest.iterations as u64;
+            let counters = completed.read(oldest.counters);
             stats.completed_paths = counters[0] as u64;
             run.live = n as u64 - counters[1] as u64;
             stats.wall = wall_before + resumed.elapsed();
-            let fraction = done(stats);
-            progress(fraction.min(1.0), stats);
-            if fraction >= 1.0 || run.live == 0 {
-                return Ok(stats.clone());
-            }
+            progress(done(stats).min(1.0), stats);
         }
     }
 
@@ -527,24 +656,186 @@ impl<'d> Renderer<'d> {
             let px = self.slot_to_pixel[slot] as usize;
             let count = a.w as u32;
             paths[px] = count;
-            pixels[px] = if count > 0 { a.truncate() / a.w } else { Vec3::ZERO };
+            pixels[px] = if count > 0 {
+                a.truncate() / a.w
+            } else {
+                Vec3::ZERO
+            };
         }
-        Ok(Image { width: w, height: h, pixels, paths })
+        Ok(Image {
+            width: w,
+            height: h,
+            pixels,
+            paths,
+        })
     }
+}
+
+/// The specialisations of every kernel an iteration may record.
+struct Specs {
+    traverse: cohort::Spec,
+    traverse8: cohort::Spec,
+    extend: cohort::Spec,
+    shadow: cohort::Spec,
+    shadow8: cohort::Spec,
+    compact: compact::Specs,
+}
+
+/// Records one iteration of the wavefront loop, stage by stage (PAPER.md §3): traverse,
+/// extend, the shadow pass with next-event estimation, compaction. Labels each dispatch
+/// in `stages`; returns which `idrays` buffer holds the live rays afterwards.
+#[allow(clippy::too_many_arguments)]
+fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+    b: &mut Batch<'_>,
+    specs: &Specs,
+    frame: &Frame,
+    scene: &GpuScene,
+    p: &Paths,
+    cur: usize,
+    compact: bool,
+    stages: &mut Vec<Stage>,
+) -> Result<usize, RenderError> {
+    let n = frame.slots;
+    let mut record =
+        |stage: Stage, dispatches: usize| stages.extend(std::iter::repeat_n(stage, dispatches));
+    // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep for its stack.
+    match &scene.nodes8 {
+        Some(n8) => traverse8::record(
+            b,
+            &specs.traverse8,
+            n,
+            frame,
+            &p.count,
+            &p.idrays[cur],
+            &p.state,
+            &p.ray_o,
+            &p.ray_d,
+            n8,
+            &scene.triangles,
+            &p.hits,
+        )?,
+        None => traverse::record(
+            b,
+            &specs.traverse,
+            n,
+            frame,
+            &p.count,
+            &p.idrays[cur],
+            &p.state,
+            &p.ray_o,
+            &p.ray_d,
+            &scene.nodes,
+            &scene.triangles,
+            &p.hits,
+        )?,
+    }
+    record(Stage::Traverse, 1);
+    extend::record::<S, E, I>(
+        b,
+        &specs.extend,
+        n,
+        frame,
+        &p.count,
+        &p.idrays[cur],
+        &p.hits,
+        &scene.triangles,
+        &scene.materials,
+        &scene.lights,
+        &p.state,
+        &p.ray_o,
+        &p.ray_d,
+        &p.beta,
+        &p.radiance,
+        &p.accum,
+        &p.shadow_o,
+        &p.shadow_d,
+        &p.nee,
+        &p.flags,
+        &p.counters,
+    )?;
+    record(Stage::Extend, 1);
+    if I::NEE {
+        match &scene.nodes8 {
+            Some(n8) => trace_shadow8::record(
+                b,
+                &specs.shadow8,
+                n,
+                frame,
+                &p.count,
+                &p.idrays[cur],
+                &p.shadow_o,
+                &p.shadow_d,
+                &p.nee,
+                n8,
+                &scene.triangles,
+                &p.radiance,
+                &p.accum,
+            )?,
+            None => trace_shadow::record(
+                b,
+                &specs.shadow,
+                n,
+                frame,
+                &p.count,
+                &p.idrays[cur],
+                &p.shadow_o,
+                &p.shadow_d,
+                &p.nee,
+                &scene.nodes,
+                &scene.triangles,
+                &p.radiance,
+                &p.accum,
+            )?,
+        }
+        record(Stage::Shadow, 1);
+    }
+    if !compact {
+        return Ok(cur);
+    }
+    compact::record(
+        b,
+        &specs.compact,
+        n,
+        &p.count,
+        &p.flags,
+        &p.block_sums,
+        &p.total,
+        &p.idrays[cur],
+        &p.idrays[1 - cur],
+    )?;
+    record(Stage::Compact, compact::DISPATCHES);
+    Ok(1 - cur)
 }
 
 /// Checks the options that do not depend on the scene, for an image of `w` x `h`.
 fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
     if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
-        return Err(RenderError::Options(format!("Russian roulette continuation {} is not in (0, 1]", opts.rr_continue)));
+        return Err(RenderError::Options(format!(
+            "Russian roulette continuation {} is not in (0, 1]",
+            opts.rr_continue
+        )));
     }
     if opts.patches_n == 0 || opts.patches_n > 1000 {
-        return Err(RenderError::Options(format!("patch count N = {} is not in 1..=1000", opts.patches_n)));
+        return Err(RenderError::Options(format!(
+            "patch count N = {} is not in 1..=1000",
+            opts.patches_n
+        )));
     }
     if opts.interleave & 1 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
         return Err(RenderError::Options(format!(
             "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
             opts.interleave
+        )));
+    }
+    if opts.coherent_light && opts.integrator != IntegratorKind::Nee {
+        return Err(RenderError::Options(
+            "coherent light sampling needs next-event estimation (--integrator nee)".into(),
+        ));
+    }
+    if opts.light_cells == 0 || opts.light_cells > 64 {
+        return Err(RenderError::Options(format!(
+            "light strata K = {} is not in 1..=64",
+            opts.light_cells
         )));
     }
     if let Some(q) = opts.whole_group_end {
@@ -574,6 +865,8 @@ fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
     frame.group_rr = opts.group_rr as u32;
     frame.coherent_glossy = (opts.coherent_glossy && opts.algorithm.coherent) as u32;
     frame.group_end_continue = opts.whole_group_end.unwrap_or(0.0);
+    frame.coherent_light = opts.coherent_light as u32;
+    frame.light_cells = opts.light_cells;
 }
 
 /// Pixel of every ray slot. Interleaved sampling: slot g renders pixel D * Morton(g)
@@ -606,59 +899,129 @@ mod tests {
     }
 
     fn opts(budget: Budget) -> RenderOptions {
-        RenderOptions { algorithm: Algorithm::parse("warp").unwrap(), budget, size: Some((32, 32)), ..Default::default() }
+        RenderOptions {
+            algorithm: Algorithm::parse("warp").unwrap(),
+            budget,
+            size: Some((32, 32)),
+            ..Default::default()
+        }
     }
 
     /// Slices of a run give the image of one render: batching does not change which
     /// paths are traced, only when the host looks.
     #[test]
     fn a_run_in_slices_renders_what_one_render_does() {
-        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else {
+            return;
+        };
         let scene = cornell();
-        let (whole, whole_stats) = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6))).unwrap().render(|_, _| {}).unwrap();
+        let (whole, whole_stats) = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6)))
+            .unwrap()
+            .render(|_, _| {})
+            .unwrap();
 
         let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6))).unwrap();
-        assert!(r.advance(Budget::PathsPerPixel(1)).is_err(), "advance before start");
+        assert!(
+            r.advance(Budget::PathsPerPixel(1)).is_err(),
+            "advance before start"
+        );
         r.start().unwrap();
         let mut last = RenderStats::default();
         for until in [1, 2, 4, 6] {
             let s = r.advance(Budget::PathsPerPixel(until)).unwrap();
-            assert!(s.completed_paths >= until as u64 * 32 * 32 && s.completed_paths >= last.completed_paths, "cumulative: {s:?}");
-            assert!(s.iterations >= last.iterations && s.kernel.total() >= last.kernel.total(), "cumulative: {s:?}");
+            assert!(
+                s.completed_paths >= until as u64 * 32 * 32
+                    && s.completed_paths >= last.completed_paths,
+                "cumulative: {s:?}"
+            );
+            assert!(
+                s.iterations >= last.iterations && s.kernel.total() >= last.kernel.total(),
+                "cumulative: {s:?}"
+            );
             last = s;
         }
         assert_eq!(last.completed_paths, whole_stats.completed_paths);
         let again = r.advance(Budget::PathsPerPixel(6)).unwrap();
-        assert_eq!((again.iterations, again.completed_paths), (last.iterations, last.completed_paths), "a reached budget renders nothing more");
+        assert_eq!(
+            (again.iterations, again.completed_paths),
+            (last.iterations, last.completed_paths),
+            "a reached budget renders nothing more"
+        );
         let sliced = r.image().unwrap();
         assert_eq!(sliced.paths, whole.paths);
-        assert!(sliced.pixels.iter().zip(&whole.pixels).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)), "same image");
+        assert!(
+            sliced
+                .pixels
+                .iter()
+                .zip(&whole.pixels)
+                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+            "same image"
+        );
     }
 
     #[test]
     fn time_slices_accumulate_and_start_resets() {
-        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
-        let mut r = Renderer::new(&d, &cornell(), opts(Budget::KernelTime(Duration::from_millis(20)))).unwrap();
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else {
+            return;
+        };
+        let mut r = Renderer::new(
+            &d,
+            &cornell(),
+            opts(Budget::KernelTime(Duration::from_millis(20))),
+        )
+        .unwrap();
         r.start().unwrap();
-        let first = r.advance(Budget::KernelTime(Duration::from_millis(10))).unwrap();
-        assert!(first.kernel.total() >= Duration::from_millis(10), "{first:?}");
-        let second = r.advance(Budget::KernelTime(Duration::from_millis(20))).unwrap();
-        assert!(second.kernel.total() >= Duration::from_millis(20) && second.iterations > first.iterations, "{second:?}");
-        assert!(second.completed_paths >= first.completed_paths && second.rays > first.rays && second.wall >= first.wall);
-        let same = r.advance(Budget::KernelTime(Duration::from_millis(15))).unwrap();
-        assert_eq!((same.iterations, same.completed_paths), (second.iterations, second.completed_paths), "an earlier budget renders nothing");
+        let first = r
+            .advance(Budget::KernelTime(Duration::from_millis(10)))
+            .unwrap();
+        assert!(
+            first.kernel.total() >= Duration::from_millis(10),
+            "{first:?}"
+        );
+        let second = r
+            .advance(Budget::KernelTime(Duration::from_millis(20)))
+            .unwrap();
+        assert!(
+            second.kernel.total() >= Duration::from_millis(20)
+                && second.iterations > first.iterations,
+            "{second:?}"
+        );
+        assert!(
+            second.completed_paths >= first.completed_paths
+                && second.rays > first.rays
+                && second.wall >= first.wall
+        );
+        let same = r
+            .advance(Budget::KernelTime(Duration::from_millis(15)))
+            .unwrap();
+        assert_eq!(
+            (same.iterations, same.completed_paths),
+            (second.iterations, second.completed_paths),
+            "an earlier budget renders nothing"
+        );
         r.start().unwrap();
-        assert_eq!(r.image().unwrap().paths.iter().sum::<u32>(), 0, "start empties the image");
+        assert_eq!(
+            r.image().unwrap().paths.iter().sum::<u32>(),
+            0,
+            "start empties the image"
+        );
         // The first submission of a run is one iteration, which spends any tiny budget.
-        let restarted = r.advance(Budget::KernelTime(Duration::from_nanos(1))).unwrap();
-        assert_eq!(restarted.iterations, 1, "statistics start again: {restarted:?}");
+        let restarted = r
+            .advance(Budget::KernelTime(Duration::from_nanos(1)))
+            .unwrap();
+        assert_eq!(
+            restarted.iterations, 1,
+            "statistics start again: {restarted:?}"
+        );
     }
 
     /// A reconfigured renderer renders exactly what a new one with those options does,
     /// including a changed interleave (its slot order is rewritten on the GPU).
     #[test]
     fn reconfigure_equals_a_new_renderer() {
-        let Some(d) = Device::for_tests(BackendKind::Vulkan) else { return };
+        let Some(d) = Device::for_tests(BackendKind::Vulkan) else {
+            return;
+        };
         let scene = cornell();
         let target = RenderOptions {
             algorithm: Algorithm::parse("block_256").unwrap(),
@@ -670,14 +1033,38 @@ mod tests {
             seed: 9,
             ..opts(Budget::PathsPerPixel(3))
         };
-        let (fresh, _) = Renderer::new(&d, &scene, target.clone()).unwrap().render(|_, _| {}).unwrap();
+        let (fresh, _) = Renderer::new(&d, &scene, target.clone())
+            .unwrap()
+            .render(|_, _| {})
+            .unwrap();
         let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(2))).unwrap();
         r.render(|_, _| {}).unwrap();
         r.reconfigure(target.clone()).unwrap();
         let (again, _) = r.render(|_, _| {}).unwrap();
         assert_eq!(again.paths, fresh.paths);
-        assert!(again.pixels.iter().zip(&fresh.pixels).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)), "same image");
-        assert!(r.reconfigure(RenderOptions { size: Some((16, 16)), ..target.clone() }).is_err(), "the size is fixed");
-        assert!(r.reconfigure(RenderOptions { interleave: 2, ..target }).is_err(), "options are checked");
+        assert!(
+            again
+                .pixels
+                .iter()
+                .zip(&fresh.pixels)
+                .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
+            "same image"
+        );
+        assert!(
+            r.reconfigure(RenderOptions {
+                size: Some((16, 16)),
+                ..target.clone()
+            })
+            .is_err(),
+            "the size is fixed"
+        );
+        assert!(
+            r.reconfigure(RenderOptions {
+                interleave: 2,
+                ..target
+            })
+            .is_err(),
+            "options are checked"
+        );
     }
 }

@@ -1,0 +1,72 @@
+//! Next-event estimation (light sampling): choosing an emitter triangle in proportion to
+//! its power through an alias table, a point uniformly by area on it, or a direction of
+//! the constant environment by cosine around the shading normal; and the power heuristic
+//! that combines light and BSDF sampling (Veach 1997), as Mitsuba's `path` integrator does.
+//!
+//! Coherent light sampling (beyond the paper): a coherence group shares the uniform number
+//! that picks the light and a stratum (a cell of a K x K grid over the light's unit-square
+//! sample domain); each ray draws its own point inside that cell. The group's numbers are
+//! uniform, so every ray's sample keeps the distribution (and the pdf) of independent
+//! light sampling: the estimator stays unbiased, only the correlation between the rays of
+//! a group changes (as with the paper's shared hemisphere patch).
+
+use crate::layout::*;
+use cohort::prelude::*;
+
+/// Triangle picked by the alias table for the uniform number `u` in [0, 1).
+#[kernel_fn]
+pub fn pick_light(lights: &[LightEntry], count: u32, u: f32) -> u32 {
+    let scaled = u * count as f32;
+    let j = (scaled as u32).min(count - 1);
+    let e = lights[j as usize];
+    let frac = scaled - j as f32;
+    if frac < e.prob {
+        e.tri
+    } else {
+        e.alias_tri
+    }
+}
+
+/// Point of triangle (v0, v1, v2) for a point `u` of the unit square, uniform by area
+/// (the square-root map, which carries equal-area cells of the square to equal-area
+/// pieces of the triangle).
+#[kernel_fn]
+pub fn triangle_point(v0: Vec3, v1: Vec3, v2: Vec3, u: Vec2) -> Vec3 {
+    let su = u.x.sqrt();
+    let b0 = 1.0 - su;
+    let b1 = u.y * su;
+    v0 * b0 + v1 * b1 + v2 * (1.0 - b0 - b1)
+}
+
+/// Power-heuristic weight (exponent 2) of a strategy with pdf `a` against one with pdf `b`.
+#[kernel_fn]
+pub fn mis_power(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    let b2 = b * b;
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// Solid-angle density of picking a point of an emitter triangle with density per area
+/// `pdf_area`, seen at distance `dist` under cosine `cos_light` at the light.
+#[kernel_fn]
+pub fn area_to_solid_angle(pdf_area: f32, dist: f32, cos_light: f32) -> f32 {
+    let c = cos_light.abs();
+    if c > 0.0 {
+        pdf_area * dist * dist / c
+    } else {
+        0.0
+    }
+}
+
+/// The group's shared light draws, from the random stream `key`: x = the number that
+/// picks the light (and the environment), y = the stratum (cell index, as f32 bits).
+#[kernel_fn]
+pub fn shared_light_draw(key: u32, cells: u32) -> Vec2 {
+    let u = crate::rng::uniform(key, 0);
+    let cell = crate::rng::hash(key ^ 0x1d87_2b41) % (cells * cells);
+    Vec2::new(u, f32::from_bits(cell))
+}
