@@ -260,7 +260,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 launch_names.push(name.clone());
                 launch_params.push(quote_spanned! {pspan=> #name: &#t });
                 let buf = format_ident!("__uniform_{}", name);
-                uniform_uploads.push(quote! { let #buf = device.upload(::core::slice::from_ref(#name))?; });
+                uniform_uploads.push(quote! { let #buf = device.upload_uniform(#name)?; });
                 launch_args.push(quote! { #buf.arg() });
             }
             ParamKind::Workgroup(t) => {

@@ -162,6 +162,19 @@ impl Device {
         Ok(GpuBuffer::new(raw, data.len()))
     }
 
+    /// A small buffer holding `value`, for a kernel's uniform argument. Unlike
+    /// [`upload`](Self::upload) it puts no work on the queue (host-visible memory, written
+    /// through its mapping), so recording a batch never waits for submissions in flight.
+    pub fn upload_uniform<T: bytemuck::Pod>(&self, value: &T) -> Result<GpuBuffer<T>> {
+        let init: &[u8] = bytemuck::bytes_of(value);
+        let bytes = alloc_size(init.len() as u64);
+        let raw = match &self.inner {
+            Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
+            Inner::Vulkan(d) => d.create_host_buffer(bytes, init)?,
+        };
+        Ok(GpuBuffer::new(raw, 1))
+    }
+
     /// Overwrites `buf[first..first + data.len()]`. Ordered before any later dispatch or read.
     pub fn write<T: bytemuck::Pod>(
         &self,
@@ -217,10 +230,13 @@ impl Device {
     /// writes of the ones before it.
     pub fn batch(&self) -> Batch<'_> {
         let pending = match &self.inner {
-            Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new()),
-            Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new()),
+            Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new(), Vec::new()),
+            Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new(), Vec::new()),
         };
-        Batch { pending, device: self }
+        Batch {
+            pending,
+            device: self,
+        }
     }
 
     /// Vulkan validation-layer errors and warnings collected since the last call (wgpu:
@@ -246,14 +262,73 @@ fn elem_bytes<T>(len: usize) -> u64 {
 }
 
 enum Pending<'d> {
-    Wgpu(&'d wgpu_backend::WgpuDevice, Vec<wgpu_backend::Cmd>),
-    Vulkan(&'d vulkan_backend::VkDevice, Vec<vulkan_backend::Cmd>),
+    Wgpu(
+        &'d wgpu_backend::WgpuDevice,
+        Vec<wgpu_backend::Cmd>,
+        Vec<(wgpu::Buffer, u64)>,
+    ),
+    Vulkan(
+        &'d vulkan_backend::VkDevice,
+        Vec<vulkan_backend::Cmd>,
+        Vec<(Arc<vulkan_backend::Buffer>, u64)>,
+    ),
 }
 
-/// Dispatches recorded for one submission. Nothing reaches the GPU before `submit`.
+/// Dispatches recorded for one submission. Nothing reaches the GPU before `submit` or
+/// `submit_async`.
 pub struct Batch<'d> {
     pending: Pending<'d>,
     device: &'d Device,
+}
+
+/// A buffer's contents as a batch copies them back after its dispatches: the handle
+/// returned by [`Batch::read_back`], redeemed with [`Completed::read`].
+#[derive(Clone, Copy, Debug)]
+pub struct ReadBack<T> {
+    index: usize,
+    len: usize,
+    _t: std::marker::PhantomData<fn() -> T>,
+}
+
+/// What a finished submission gives back: one `DispatchStats` per dispatch, in recording
+/// order, and the read-backs.
+pub struct Completed {
+    pub stats: Vec<DispatchStats>,
+    reads: Vec<Vec<u8>>,
+}
+
+impl Completed {
+    /// The contents of a buffer read back by this submission's batch.
+    pub fn read<T: bytemuck::Pod>(&self, r: ReadBack<T>) -> Vec<T> {
+        let bytes = &self.reads[r.index];
+        let mut out = vec![T::zeroed(); r.len];
+        bytemuck::cast_slice_mut::<T, u8>(&mut out)
+            .copy_from_slice(&bytes[..r.len * std::mem::size_of::<T>()]);
+        out
+    }
+}
+
+enum InFlight<'d> {
+    Wgpu(&'d wgpu_backend::WgpuDevice, wgpu_backend::WgpuInFlight),
+    Vulkan(vulkan_backend::VkInFlight),
+}
+
+/// A batch on the GPU. The host goes on (e.g. records the next batch) until it calls
+/// [`wait`](Submission::wait); submissions run in the order they were made. Dropping one
+/// without waiting waits for it.
+pub struct Submission<'d> {
+    inner: InFlight<'d>,
+}
+
+impl Submission<'_> {
+    /// Waits until the GPU has run the batch.
+    pub fn wait(self) -> Result<Completed> {
+        let (stats, reads) = match self.inner {
+            InFlight::Wgpu(d, f) => d.wait_for(f)?,
+            InFlight::Vulkan(f) => f.wait()?,
+        };
+        Ok(Completed { stats, reads })
+    }
 }
 
 impl<'d> Batch<'d> {
@@ -269,11 +344,11 @@ impl<'d> Batch<'d> {
         dispatch: Dispatch<'_>,
     ) -> Result<()> {
         match &mut self.pending {
-            Pending::Wgpu(d, cmds) => {
+            Pending::Wgpu(d, cmds, _) => {
                 check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
                 cmds.push(d.record(kernel, args, &dispatch)?);
             }
-            Pending::Vulkan(d, cmds) => {
+            Pending::Vulkan(d, cmds, _) => {
                 check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
                 cmds.push(d.record(kernel, args, &dispatch)?);
             }
@@ -281,10 +356,33 @@ impl<'d> Batch<'d> {
         Ok(())
     }
 
+    /// Copies `buf` back to the host after all of the batch's dispatches, in the same
+    /// submission: its contents arrive with the submission's [`Completed`] without a
+    /// separate, blocking read.
+    pub fn read_back<T: bytemuck::Pod>(&mut self, buf: &GpuBuffer<T>) -> Result<ReadBack<T>> {
+        let bytes = elem_bytes::<T>(buf.len());
+        let index = match &mut self.pending {
+            Pending::Wgpu(d, _, reads) => {
+                reads.push((d.own_buffer(&buf.raw)?, bytes));
+                reads.len() - 1
+            }
+            Pending::Vulkan(d, _, reads) => {
+                reads.push((d.own_buffer(&buf.raw)?, bytes));
+                reads.len() - 1
+            }
+        };
+        Ok(ReadBack {
+            index,
+            len: buf.len(),
+            _t: std::marker::PhantomData,
+        })
+    }
+
+    /// Dispatches recorded so far.
     pub fn len(&self) -> usize {
         match &self.pending {
-            Pending::Wgpu(_, cmds) => cmds.len(),
-            Pending::Vulkan(_, cmds) => cmds.len(),
+            Pending::Wgpu(_, cmds, _) => cmds.len(),
+            Pending::Vulkan(_, cmds, _) => cmds.len(),
         }
     }
 
@@ -294,12 +392,16 @@ impl<'d> Batch<'d> {
 
     /// Submits everything as one command buffer and waits; one `DispatchStats` per dispatch.
     pub fn submit(self) -> Result<Vec<DispatchStats>> {
-        match self.pending {
-            Pending::Wgpu(_, cmds) if cmds.is_empty() => Ok(Vec::new()),
-            Pending::Vulkan(_, cmds) if cmds.is_empty() => Ok(Vec::new()),
-            Pending::Wgpu(d, cmds) => d.submit(&cmds),
-            Pending::Vulkan(d, cmds) => d.submit(&cmds),
-        }
+        Ok(self.submit_async()?.wait()?.stats)
+    }
+
+    /// Submits everything as one command buffer and returns at once.
+    pub fn submit_async(self) -> Result<Submission<'d>> {
+        let inner = match self.pending {
+            Pending::Wgpu(d, cmds, reads) => InFlight::Wgpu(d, d.submit_async(cmds, reads)?),
+            Pending::Vulkan(d, cmds, reads) => InFlight::Vulkan(d.submit_async(cmds, reads)?),
+        };
+        Ok(Submission { inner })
     }
 }
 

@@ -24,7 +24,7 @@ mod wgpu_backend;
 
 pub use artifact::*;
 pub use buffer::{BufferArg, GpuBuffer};
-pub use device::{Batch, Device, DeviceInfo, Dispatch, DispatchStats};
+pub use device::{Batch, Completed, Device, DeviceInfo, Dispatch, DispatchStats, ReadBack, Submission};
 pub use error::{Result, RuntimeError};
 
 /// Which GPU API a [`Device`] drives.

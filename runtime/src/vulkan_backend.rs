@@ -118,6 +118,7 @@ pub(crate) struct VkDevice {
     pub(crate) pipelines: PipelineCache<Pipeline>,
     shared: Arc<Shared>,
     submitter: Mutex<Submitter>,
+    queue_family: u32,
     subgroup_control: SubgroupControl,
     timestamp_valid_bits: u32,
     timestamp_period_ns: f64,
@@ -154,6 +155,7 @@ impl VkDevice {
             pipelines: PipelineCache::new(Code::Spirv),
             shared,
             submitter: Mutex::new(submitter),
+            queue_family: desc.queue_family,
             subgroup_control: desc.subgroup_control,
             timestamp_valid_bits: desc.timestamp_valid_bits,
             timestamp_period_ns: desc.timestamp_period_ns,
@@ -533,17 +535,43 @@ impl VkDevice {
         }
     }
 
-    pub(crate) fn submit(&self, cmds: &[Cmd]) -> Result<Vec<DispatchStats>> {
+    /// A host-visible buffer holding `init` (zero-padded to `bytes`), written through its
+    /// mapping: no queue work, so it never waits for submissions in flight (the uniform
+    /// arguments that batches record).
+    pub(crate) fn create_host_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        let mut buffer = self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::CpuToGpu)?;
+        let mapped = mapped_bytes(&mut buffer)?;
+        mapped[..init.len()].copy_from_slice(init);
+        mapped[init.len()..bytes as usize].fill(0);
+        Ok(RawBuffer::Vulkan(Arc::new(buffer)))
+    }
+
+    /// The buffer behind `raw`, for a read-back recorded in a batch.
+    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<Arc<Buffer>> {
+        self.own(raw)
+            .cloned()
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
+    }
+
+    /// Submits `cmds`, then copies of `reads` (buffer, bytes) to host memory, and returns
+    /// without waiting. Each submission has its own command pool, fence, descriptor and
+    /// query pools, so several can be in flight; the queue orders them.
+    pub(crate) fn submit_async(
+        &self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(Arc<Buffer>, u64)>,
+    ) -> Result<VkInFlight> {
         let device = &self.shared.device;
         let n = cmds.len() as u32;
-        let fail = |e: RuntimeError| {
+        let names = {
             let mut names: Vec<&str> = cmds.iter().map(|c| c.kernel.as_str()).collect();
             names.dedup();
-            RuntimeError::Dispatch {
-                kernel: names.join(", "),
-                backend: BACKEND,
-                detail: e.to_string(),
-            }
+            names.join(", ")
+        };
+        let fail = |e: RuntimeError| RuntimeError::Dispatch {
+            kernel: names.clone(),
+            backend: BACKEND,
+            detail: e.to_string(),
         };
         let count = |ty| {
             cmds.iter()
@@ -551,61 +579,84 @@ impl VkDevice {
                 .filter(|b| b.1 == ty)
                 .count() as u32
         };
-        // A pool per submission, destroyed after the wait: nothing to track or leak.
-        let pool_sizes = [
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_BUFFER,
-                descriptor_count: count(vk::DescriptorType::STORAGE_BUFFER).max(1),
-            },
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::UNIFORM_BUFFER,
-                descriptor_count: count(vk::DescriptorType::UNIFORM_BUFFER).max(1),
-            },
-        ];
-        let descriptor_pool = unsafe {
-            device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(n)
-                    .pool_sizes(&pool_sizes),
-                None,
-            )
-        }
-        .vk("vkCreateDescriptorPool")
-        .map_err(fail)?;
-        let query_pool = if self.info.timestamps {
-            let created = unsafe {
-                device.create_query_pool(
-                    &vk::QueryPoolCreateInfo::default()
-                        .query_type(vk::QueryType::TIMESTAMP)
-                        .query_count(2 * n),
-                    None,
-                )
-            };
-            match created {
-                Ok(q) => Some(q),
-                Err(e) => {
-                    unsafe { device.destroy_descriptor_pool(descriptor_pool, None) };
-                    return Err(fail(RuntimeError::Vulkan {
-                        call: "vkCreateQueryPool",
-                        result: e,
-                    }));
+        let mut f = VkInFlight {
+            shared: self.shared.clone(),
+            pool: vk::CommandPool::null(),
+            fence: vk::Fence::null(),
+            descriptor_pool: vk::DescriptorPool::null(),
+            query_pool: None,
+            submitted: false,
+            dispatches: cmds.len(),
+            timestamp_valid_bits: self.timestamp_valid_bits,
+            timestamp_period_ns: self.timestamp_period_ns,
+            staging: Vec::new(),
+            cmds: Vec::new(),
+            reads: Vec::new(),
+        };
+        // Every object is owned by `f` as soon as it exists: an error drops `f`, which
+        // destroys what was made.
+        let result = (|| -> Result<()> {
+            unsafe {
+                f.pool = device
+                    .create_command_pool(
+                        &vk::CommandPoolCreateInfo::default()
+                            .flags(vk::CommandPoolCreateFlags::TRANSIENT)
+                            .queue_family_index(self.queue_family),
+                        None,
+                    )
+                    .vk("vkCreateCommandPool")?;
+                f.fence = device
+                    .create_fence(&vk::FenceCreateInfo::default(), None)
+                    .vk("vkCreateFence")?;
+                let pool_sizes = [
+                    vk::DescriptorPoolSize {
+                        ty: vk::DescriptorType::STORAGE_BUFFER,
+                        descriptor_count: count(vk::DescriptorType::STORAGE_BUFFER).max(1),
+                    },
+                    vk::DescriptorPoolSize {
+                        ty: vk::DescriptorType::UNIFORM_BUFFER,
+                        descriptor_count: count(vk::DescriptorType::UNIFORM_BUFFER).max(1),
+                    },
+                ];
+                f.descriptor_pool = device
+                    .create_descriptor_pool(
+                        &vk::DescriptorPoolCreateInfo::default()
+                            .max_sets(n.max(1))
+                            .pool_sizes(&pool_sizes),
+                        None,
+                    )
+                    .vk("vkCreateDescriptorPool")?;
+                if self.info.timestamps && n > 0 {
+                    f.query_pool = Some(
+                        device
+                            .create_query_pool(
+                                &vk::QueryPoolCreateInfo::default()
+                                    .query_type(vk::QueryType::TIMESTAMP)
+                                    .query_count(2 * n),
+                                None,
+                            )
+                            .vk("vkCreateQueryPool")?,
+                    );
                 }
             }
-        } else {
-            None
-        };
-
-        let result = (|| -> Result<Vec<DispatchStats>> {
-            let set_layouts: Vec<vk::DescriptorSetLayout> =
-                cmds.iter().map(|c| c.pipeline.set_layout).collect();
-            let sets = unsafe {
-                device.allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(descriptor_pool)
-                        .set_layouts(&set_layouts),
-                )
+            for (_, bytes) in &reads {
+                f.staging
+                    .push(self.staging((*bytes).max(4), MemoryLocation::GpuToCpu)?);
             }
-            .vk("vkAllocateDescriptorSets")?;
+            let sets = if n == 0 {
+                Vec::new()
+            } else {
+                let set_layouts: Vec<vk::DescriptorSetLayout> =
+                    cmds.iter().map(|c| c.pipeline.set_layout).collect();
+                unsafe {
+                    device.allocate_descriptor_sets(
+                        &vk::DescriptorSetAllocateInfo::default()
+                            .descriptor_pool(f.descriptor_pool)
+                            .set_layouts(&set_layouts),
+                    )
+                }
+                .vk("vkAllocateDescriptorSets")?
+            };
             let buffer_infos: Vec<Vec<vk::DescriptorBufferInfo>> = cmds
                 .iter()
                 .map(|c| {
@@ -638,16 +689,42 @@ impl VkDevice {
                 .collect();
             unsafe { device.update_descriptor_sets(&writes, &[]) };
 
-            self.run(|d, cb| unsafe {
+            let query_pool = f.query_pool;
+            unsafe {
+                let cb = device
+                    .allocate_command_buffers(
+                        &vk::CommandBufferAllocateInfo::default()
+                            .command_pool(f.pool)
+                            .level(vk::CommandBufferLevel::PRIMARY)
+                            .command_buffer_count(1),
+                    )
+                    .vk("vkAllocateCommandBuffers")?[0];
+                device
+                    .begin_command_buffer(
+                        cb,
+                        &vk::CommandBufferBeginInfo::default()
+                            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .vk("vkBeginCommandBuffer")?;
+                // Earlier submissions' writes (and host writes) are visible to this one.
+                let all = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
+                barrier(
+                    device,
+                    cb,
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::AccessFlags::MEMORY_WRITE,
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    all,
+                );
                 if let Some(q) = query_pool {
-                    d.cmd_reset_query_pool(cb, q, 0, 2 * n);
+                    device.cmd_reset_query_pool(cb, q, 0, 2 * n);
                 }
                 for (i, (cmd, &set)) in cmds.iter().zip(&sets).enumerate() {
                     if i > 0 {
                         // Each dispatch sees the previous ones' writes, including
                         // indirect arguments they computed.
                         barrier(
-                            d,
+                            device,
                             cb,
                             vk::PipelineStageFlags::COMPUTE_SHADER,
                             vk::AccessFlags::SHADER_WRITE,
@@ -658,8 +735,12 @@ impl VkDevice {
                                 | vk::AccessFlags::INDIRECT_COMMAND_READ,
                         );
                     }
-                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, cmd.pipeline.pipeline);
-                    d.cmd_bind_descriptor_sets(
+                    device.cmd_bind_pipeline(
+                        cb,
+                        vk::PipelineBindPoint::COMPUTE,
+                        cmd.pipeline.pipeline,
+                    );
+                    device.cmd_bind_descriptor_sets(
                         cb,
                         vk::PipelineBindPoint::COMPUTE,
                         cmd.pipeline.layout,
@@ -670,7 +751,7 @@ impl VkDevice {
                     // COMPUTE_SHADER rather than TOP_OF_PIPE: the begin stamp waits for the
                     // previous dispatch, so consecutive timings do not overlap.
                     if let Some(q) = query_pool {
-                        d.cmd_write_timestamp(
+                        device.cmd_write_timestamp(
                             cb,
                             vk::PipelineStageFlags::COMPUTE_SHADER,
                             q,
@@ -678,13 +759,13 @@ impl VkDevice {
                         );
                     }
                     match &cmd.groups {
-                        Groups::Direct([x, y, z]) => d.cmd_dispatch(cb, *x, *y, *z),
+                        Groups::Direct([x, y, z]) => device.cmd_dispatch(cb, *x, *y, *z),
                         Groups::Indirect(buffer, offset) => {
-                            d.cmd_dispatch_indirect(cb, buffer.raw, *offset)
+                            device.cmd_dispatch_indirect(cb, buffer.raw, *offset)
                         }
                     }
                     if let Some(q) = query_pool {
-                        d.cmd_write_timestamp(
+                        device.cmd_write_timestamp(
                             cb,
                             vk::PipelineStageFlags::COMPUTE_SHADER,
                             q,
@@ -692,35 +773,141 @@ impl VkDevice {
                         );
                     }
                 }
-            })?;
+                if !reads.is_empty() {
+                    barrier(
+                        device,
+                        cb,
+                        vk::PipelineStageFlags::ALL_COMMANDS,
+                        vk::AccessFlags::MEMORY_WRITE,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::TRANSFER_READ,
+                    );
+                    for ((src, bytes), dst) in reads.iter().zip(&f.staging) {
+                        let region = vk::BufferCopy {
+                            src_offset: 0,
+                            dst_offset: 0,
+                            size: *bytes,
+                        };
+                        if *bytes > 0 {
+                            device.cmd_copy_buffer(cb, src.raw, dst.raw, &[region]);
+                        }
+                    }
+                }
+                // This submission's writes are visible to the host once its fence signals.
+                barrier(
+                    device,
+                    cb,
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::AccessFlags::MEMORY_WRITE,
+                    vk::PipelineStageFlags::HOST,
+                    vk::AccessFlags::HOST_READ,
+                );
+                device.end_command_buffer(cb).vk("vkEndCommandBuffer")?;
+                let cbs = [cb];
+                let submit = vk::SubmitInfo::default().command_buffers(&cbs);
+                // The queue needs external synchronisation; the submitter's lock gives it.
+                let s = lock(&self.submitter);
+                device
+                    .queue_submit(s.queue, &[submit], f.fence)
+                    .vk("vkQueueSubmit")?;
+                f.submitted = true;
+            }
+            Ok(())
+        })();
+        result.map_err(fail)?;
+        f.cmds = cmds;
+        f.reads = reads;
+        Ok(f)
+    }
+}
 
-            let Some(q) = query_pool else {
-                return Ok(vec![DispatchStats::default(); cmds.len()]);
-            };
-            let mut ticks = vec![0u64; 2 * cmds.len()];
-            unsafe {
-                device.get_query_pool_results(
-                    q,
-                    0,
-                    &mut ticks,
-                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+/// A submission on the GPU: `wait` for its timings and read-backs. Dropping it without
+/// waiting still waits, so nothing it uses is freed while the GPU runs it.
+pub(crate) struct VkInFlight {
+    shared: Arc<Shared>,
+    pool: vk::CommandPool,
+    fence: vk::Fence,
+    descriptor_pool: vk::DescriptorPool,
+    query_pool: Option<vk::QueryPool>,
+    submitted: bool,
+    dispatches: usize,
+    timestamp_valid_bits: u32,
+    timestamp_period_ns: f64,
+    staging: Vec<Buffer>,
+    /// Keeps every bound buffer alive until the GPU is done.
+    cmds: Vec<Cmd>,
+    /// The buffers copied back, and how many bytes of each.
+    reads: Vec<(Arc<Buffer>, u64)>,
+}
+
+impl VkInFlight {
+    /// Waits for the submission; its dispatches' timings and the read-back bytes.
+    pub(crate) fn wait(mut self) -> Result<(Vec<DispatchStats>, Vec<Vec<u8>>)> {
+        let device = &self.shared.device;
+        let fail = |e: RuntimeError| {
+            let mut names: Vec<&str> = self.cmds.iter().map(|c| c.kernel.as_str()).collect();
+            names.dedup();
+            RuntimeError::Dispatch {
+                kernel: names.join(", "),
+                backend: BACKEND,
+                detail: e.to_string(),
+            }
+        };
+        unsafe { device.wait_for_fences(&[self.fence], true, u64::MAX) }
+            .vk("vkWaitForFences")
+            .map_err(fail)?;
+        self.submitted = false;
+        let stats = match self.query_pool {
+            None => vec![DispatchStats::default(); self.dispatches],
+            Some(q) => {
+                let mut ticks = vec![0u64; 2 * self.dispatches];
+                unsafe {
+                    device.get_query_pool_results(
+                        q,
+                        0,
+                        &mut ticks,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                }
+                .vk("vkGetQueryPoolResults")
+                .map_err(fail)?;
+                crate::timing::stats_from_ticks(
+                    &ticks,
+                    self.timestamp_valid_bits,
+                    self.timestamp_period_ns,
                 )
             }
-            .vk("vkGetQueryPoolResults")?;
-            Ok(crate::timing::stats_from_ticks(
-                &ticks,
-                self.timestamp_valid_bits,
-                self.timestamp_period_ns,
-            ))
-        })();
+        };
+        let mut reads = Vec::with_capacity(self.staging.len());
+        let sizes: Vec<u64> = self.reads.iter().map(|r| r.1).collect();
+        for (staging, size) in self.staging.iter_mut().zip(sizes) {
+            let bytes = mapped_bytes(staging).map_err(fail)?;
+            reads.push(bytes[..size as usize].to_vec());
+        }
+        Ok((stats, reads))
+    }
+}
 
+impl Drop for VkInFlight {
+    fn drop(&mut self) {
+        let device = &self.shared.device;
         unsafe {
-            device.destroy_descriptor_pool(descriptor_pool, None);
-            if let Some(q) = query_pool {
+            if self.submitted {
+                let _ = device.wait_for_fences(&[self.fence], true, u64::MAX);
+            }
+            if let Some(q) = self.query_pool {
                 device.destroy_query_pool(q, None);
             }
+            if self.descriptor_pool != vk::DescriptorPool::null() {
+                device.destroy_descriptor_pool(self.descriptor_pool, None);
+            }
+            if self.fence != vk::Fence::null() {
+                device.destroy_fence(self.fence, None);
+            }
+            if self.pool != vk::CommandPool::null() {
+                device.destroy_command_pool(self.pool, None);
+            }
         }
-        result.map_err(fail)
     }
 }
 

@@ -419,19 +419,31 @@ impl WgpuDevice {
         })
     }
 
-    pub(crate) fn submit(&self, cmds: &[Cmd]) -> Result<Vec<DispatchStats>> {
-        let fail = |detail: String| {
-            let mut names: Vec<&str> = cmds.iter().map(|c| c.kernel.as_str()).collect();
-            names.dedup();
-            RuntimeError::Dispatch {
-                kernel: names.join(", "),
-                backend: BACKEND,
-                detail,
-            }
+    /// The buffer behind `raw`, for a read-back recorded in a batch.
+    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<wgpu::Buffer> {
+        self.own(raw)
+            .cloned()
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
+    }
+
+    /// Submits `cmds`, then copies of `reads` (buffer, bytes) into mappable buffers, and
+    /// returns without waiting (wgpu queues submissions in order).
+    pub(crate) fn submit_async(
+        &self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(wgpu::Buffer, u64)>,
+    ) -> Result<WgpuInFlight> {
+        let mut names: Vec<&str> = cmds.iter().map(|c| c.kernel.as_str()).collect();
+        names.dedup();
+        let names = names.join(", ");
+        let fail = |detail: String| RuntimeError::Dispatch {
+            kernel: names.clone(),
+            backend: BACKEND,
+            detail,
         };
         let n = cmds.len() as u32;
         let scope = Scope::push(&self.device);
-        let queries = self.info.timestamps.then(|| {
+        let queries = (self.info.timestamps && n > 0).then(|| {
             self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("cohort timestamps"),
                 ty: wgpu::QueryType::Timestamp,
@@ -475,7 +487,7 @@ impl WgpuDevice {
                 }
             }
         }
-        let readback = queries.as_ref().map(|q| {
+        let timestamps = queries.as_ref().map(|q| {
             let bytes = 16 * n as u64;
             let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("cohort timestamp resolve"),
@@ -493,6 +505,19 @@ impl WgpuDevice {
             enc.copy_buffer_to_buffer(&resolve, 0, &readback, 0, bytes);
             readback
         });
+        let mut read_buffers = Vec::with_capacity(reads.len());
+        for (src, bytes) in &reads {
+            // Allocations are multiples of 16 bytes, so the rounded copy stays inside.
+            let size = round_up((*bytes).max(4), wgpu::COPY_BUFFER_ALIGNMENT);
+            let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("cohort batch readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            enc.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+            read_buffers.push((staging, *bytes));
+        }
         let command_buffer = enc.finish();
         // Encoding errors (bad bindings, ...) surface here; submitting an invalid command
         // buffer would only add a second, less helpful error.
@@ -500,28 +525,66 @@ impl WgpuDevice {
 
         let scope = Scope::push(&self.device);
         let index = self.queue.submit([command_buffer]);
-        let mapped = readback.as_ref().map(map_read);
-        self.wait(index)?;
         scope.pop().map_err(fail)?;
+        // Mapping requests complete once the device is polled past this submission.
+        let timestamps = timestamps.map(|b| {
+            let rx = map_read(&b);
+            (b, rx)
+        });
+        let reads = read_buffers
+            .into_iter()
+            .map(|(b, bytes)| {
+                let rx = map_read(&b);
+                (b, bytes, rx)
+            })
+            .collect();
+        Ok(WgpuInFlight {
+            index,
+            names,
+            dispatches: cmds.len(),
+            timestamps,
+            reads,
+        })
+    }
 
-        let (Some(readback), Some(mapped)) = (readback, mapped) else {
-            return Ok(vec![DispatchStats::default(); cmds.len()]);
+    /// Waits for a submission; its dispatches' timings and the read-back bytes.
+    pub(crate) fn wait_for(&self, f: WgpuInFlight) -> Result<(Vec<DispatchStats>, Vec<Vec<u8>>)> {
+        let fail = |e: RuntimeError| RuntimeError::Dispatch {
+            kernel: f.names.clone(),
+            backend: BACKEND,
+            detail: e.to_string(),
         };
-        receive_map(mapped)?;
-        let view = readback
-            .slice(..)
-            .get_mapped_range()
-            .map_err(|e| RuntimeError::Wgpu {
-                context: "timestamp mapping",
-                detail: e.to_string(),
-            })?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&view[..]);
-        // wgpu hands back raw 64-bit ticks; the Vulkan layer below already masked them.
-        Ok(crate::timing::stats_from_ticks(
-            &ticks,
-            64,
-            self.timestamp_period_ns,
-        ))
+        self.wait(f.index.clone()).map_err(fail)?;
+        let stats = match f.timestamps {
+            None => vec![DispatchStats::default(); f.dispatches],
+            Some((readback, rx)) => {
+                receive_map(rx).map_err(fail)?;
+                let view =
+                    readback
+                        .slice(..)
+                        .get_mapped_range()
+                        .map_err(|e| RuntimeError::Wgpu {
+                            context: "timestamp mapping",
+                            detail: e.to_string(),
+                        })?;
+                let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&view[..]);
+                // wgpu hands back raw 64-bit ticks; the Vulkan layer below already masked them.
+                crate::timing::stats_from_ticks(&ticks, 64, self.timestamp_period_ns)
+            }
+        };
+        let mut reads = Vec::with_capacity(f.reads.len());
+        for (buffer, bytes, rx) in f.reads {
+            receive_map(rx).map_err(fail)?;
+            let view = buffer
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| RuntimeError::Wgpu {
+                    context: "read-back mapping",
+                    detail: e.to_string(),
+                })?;
+            reads.push(view[..bytes as usize].to_vec());
+        }
+        Ok((stats, reads))
     }
 
     fn wait(&self, index: wgpu::SubmissionIndex) -> Result<()> {
@@ -537,6 +600,18 @@ impl WgpuDevice {
             })
     }
 }
+
+/// A submission on the queue: `WgpuDevice::wait_for` gives its timings and read-backs.
+/// (wgpu keeps what a submitted command buffer uses alive by itself.)
+pub(crate) struct WgpuInFlight {
+    index: wgpu::SubmissionIndex,
+    names: String,
+    dispatches: usize,
+    timestamps: Option<(wgpu::Buffer, MapReceiver)>,
+    reads: Vec<(wgpu::Buffer, u64, MapReceiver)>,
+}
+
+type MapReceiver = mpsc::Receiver<std::result::Result<(), wgpu::BufferAsyncError>>;
 
 /// Starts mapping `buffer` for reading; the result arrives once the device is polled.
 fn map_read(
