@@ -318,3 +318,17 @@ impl<'a, T: Copy + KPow> KPow for &'a T {
         (*self).k_pow(n)
     }
 }
+
+// `%` on float vectors is refused (see `cohort::ir::ops::FloatVectorRem`); these impls
+// exist only to carry the refusal's message to the host form's error.
+macro_rules! float_vec_rem_refused {
+    ($($v:ty),*) => {$(
+        impl<R> KRem<R> for $v where $v: crate::ir::ops::FloatVectorRem<R> {
+            type Output = $v;
+            fn k_rem(self, _: R) -> $v {
+                unreachable!("refused at compile time")
+            }
+        }
+    )*};
+}
+float_vec_rem_refused!(Vec2, Vec3, Vec4);
