@@ -8,6 +8,15 @@
 //! Rust `f32`/integer expressions, except where LANGUAGE.md states a precision bound
 //! (transcendental functions, `powf`).
 
+// The references spell out Rust's meaning on purpose (`!(x < y)`, `NAN as i32`, `x % 3 == 0`,
+// division with its defined result at zero).
+#![allow(
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::cast_nan_to_int,
+    clippy::manual_is_multiple_of,
+    clippy::manual_checked_div
+)]
+
 mod common;
 use cohort::host::{for_each_invocation, for_each_invocation_in_groups};
 use cohort::runtime::Device;

@@ -287,7 +287,7 @@ fn zip<V: IntVec>(a: V, b: V, f: impl Fn(V::S, V::S) -> V::S) -> V {
 // References to values (helper parameters `x: &f32`) compute on the value.
 macro_rules! by_ref {
     ($($tr:ident, $m:ident);*) => {$(
-        impl<'a, T: Copy + $tr<R>, R> $tr<R> for &'a T {
+        impl<T: Copy + $tr<R>, R> $tr<R> for &T {
             type Output = T::Output;
             #[inline]
             fn $m(self, rhs: R) -> T::Output {
@@ -297,21 +297,21 @@ macro_rules! by_ref {
     )*};
 }
 by_ref!(KAdd, k_add; KSub, k_sub; KMul, k_mul; KDiv, k_div; KRem, k_rem; KShl, k_shl; KShr, k_shr);
-impl<'a, T: Copy + KNeg> KNeg for &'a T {
+impl<T: Copy + KNeg> KNeg for &T {
     type Output = T::Output;
     #[inline]
     fn k_neg(self) -> T::Output {
         (*self).k_neg()
     }
 }
-impl<'a, T: Copy + KAbs> KAbs for &'a T {
+impl<T: Copy + KAbs> KAbs for &T {
     type Output = T::Output;
     #[inline]
     fn k_abs(self) -> T::Output {
         (*self).k_abs()
     }
 }
-impl<'a, T: Copy + KPow> KPow for &'a T {
+impl<T: Copy + KPow> KPow for &T {
     type Output = T::Output;
     #[inline]
     fn k_pow(self, n: u32) -> T::Output {

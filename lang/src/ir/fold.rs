@@ -13,7 +13,7 @@ pub(crate) fn binary(op: B, a: L, b: L) -> Option<L> {
             B::Add => L::U32(x.wrapping_add(y)),
             B::Subtract => L::U32(x.wrapping_sub(y)),
             B::Multiply => L::U32(x.wrapping_mul(y)),
-            B::Divide => L::U32(if y == 0 { x } else { x / y }),
+            B::Divide => L::U32(x.checked_div(y).unwrap_or(x)),
             B::Modulo => L::U32(if y == 0 { 0 } else { x % y }),
             B::And => L::U32(x & y),
             B::InclusiveOr => L::U32(x | y),

@@ -71,7 +71,7 @@ fn validate_spec(info: &KernelInfo, spec: &Spec) {
     );
     if spec.group == Group::Warp {
         assert!(
-            spec.workgroup_size % crate::spec::WARP == 0,
+            spec.workgroup_size.is_multiple_of(crate::spec::WARP),
             "kernel `{}`: group = Warp needs a workgroup size that is a multiple of 32, not {}",
             info.name,
             spec.workgroup_size
