@@ -141,13 +141,19 @@ fn static_where(generics: &syn::Generics) -> TokenStream {
     }
 }
 
-pub fn expand_fn(f: syn::ItemFn) -> syn::Result<TokenStream> {
+pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
+    let tps: Vec<_> = f
+        .sig
+        .generics
+        .type_params()
+        .map(|t| t.ident.clone())
+        .collect();
+    let key = quote!(__Key<#(#tps),*>);
+    let (s, body) = ir_body(&f.sig, &f.block, key, &[], &f.sig.ident.to_string())?;
+    crate::host::host_block(&mut f.block);
     let name = &f.sig.ident;
     let vis = &f.vis;
     let generics = &f.sig.generics;
-    let tps: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
-    let key = quote!(__Key<#(#tps),*>);
-    let (s, body) = ir_body(&f.sig, &f.block, key, &[], &name.to_string())?;
     let params = &s.params;
     let ret = &s.ret;
     let wh = static_where(generics);
@@ -195,6 +201,13 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
             extra.push(syn::parse2::<syn::TraitItem>(decl)?);
         }
     }
+    for item in t.items.iter_mut() {
+        if let syn::TraitItem::Fn(m) = item {
+            if let Some(block) = &mut m.default {
+                crate::host::host_block(block);
+            }
+        }
+    }
     t.items.extend(extra);
     // Helper instances are keyed by the implementing type, which must be 'static.
     t.supertraits.push(syn::parse_quote!('static));
@@ -226,6 +239,11 @@ pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
                 #[allow(unused_variables, unused_mut, unused_braces, unused_parens)]
                 fn #ir_name #generics (#(#params),*) -> #ret { #body }
             })?);
+        }
+    }
+    for item in i.items.iter_mut() {
+        if let syn::ImplItem::Fn(m) = item {
+            crate::host::host_block(&mut m.block);
         }
     }
     i.items.extend(extra);

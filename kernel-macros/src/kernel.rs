@@ -270,6 +270,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         }
     }
     let body = rw.block(&f.block)?;
+    crate::host::host_block(&mut f.block);
 
     // Host-computed group values (group = Grid): the closures of `group_share`, in
     // source order, evaluated with the launch's uniform arguments in scope.

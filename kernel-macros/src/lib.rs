@@ -3,13 +3,16 @@
 //! `#[kernel]` and the helper attributes parse a function with syn, check that it stays in
 //! the supported subset (each rejection is a `syn::Error` at the offending span, with the
 //! alternative), check uniformity, and rewrite the body into Rust that builds IR through
-//! `::cohort::ir` when it runs. The original function is kept unchanged for the host. This
+//! `::cohort::ir` when it runs. The original function is kept for the host, with integer
+//! arithmetic routed through `::cohort::host::ops` (`host.rs`) so that it wraps and divides
+//! as the GPU does in every build profile. This
 //! crate never builds naga IR or shader text itself: see ARCHITECTURE.md's macro trap.
 
 use proc_macro::TokenStream;
 
 mod derive;
 mod helper;
+mod host;
 mod kernel;
 mod rewrite;
 mod uniformity;

@@ -2,6 +2,8 @@
 //! tests and references. Kernels without barriers or cross-invocation communication
 //! compute the same thing here as on the GPU; subgroups are one lane wide.
 
+pub mod ops;
+
 use std::cell::Cell;
 
 use crate::spec::{Group, WARP};
@@ -31,28 +33,51 @@ pub struct Invocation {
 
 /// Calls `f` for each of `threads` invocations (rounded up to whole workgroups, like a
 /// launch with `Grid::Threads`), in order, setting the group index for `group_share`.
-pub fn for_each_invocation(threads: u32, workgroup_size: u32, group: Group, mut f: impl FnMut(Invocation)) {
+pub fn for_each_invocation(
+    threads: u32,
+    workgroup_size: u32,
+    group: Group,
+    f: impl FnMut(Invocation),
+) {
     let groups = threads.div_ceil(workgroup_size).max(1);
-    for wg in 0..groups {
-        for local in 0..workgroup_size {
-            let global = wg * workgroup_size + local;
-            let g = match group {
-                Group::Thread => global,
-                Group::Warp => global / WARP,
-                Group::Block(_) => wg,
-                Group::Grid => 0,
-            };
-            GROUP.with(|c| c.set(g));
-            f(Invocation {
-                global_index: global,
-                local_index: local,
-                workgroup_index: wg,
-                global_id: UVec3::new(global, 0, 0),
-                local_id: UVec3::new(local, 0, 0),
-                workgroup_id: UVec3::new(wg, 0, 0),
-                num_workgroups: UVec3::new(groups, 1, 1),
-                group: g,
-            });
+    for_each_invocation_in_groups([groups, 1, 1], workgroup_size, group, f)
+}
+
+/// Calls `f` for every invocation of a dispatch of `groups` workgroups (like a launch
+/// with `Grid::Groups(groups)`), in `global_index` order: workgroups x fastest, then y,
+/// then z; `global_index = workgroup_index * workgroup_size + local_index`.
+pub fn for_each_invocation_in_groups(
+    groups: [u32; 3],
+    workgroup_size: u32,
+    group: Group,
+    mut f: impl FnMut(Invocation),
+) {
+    let [gx, gy, gz] = groups;
+    for wz in 0..gz {
+        for wy in 0..gy {
+            for wx in 0..gx {
+                let wg = wx.wrapping_add(gx.wrapping_mul(wy.wrapping_add(gy.wrapping_mul(wz))));
+                for local in 0..workgroup_size {
+                    let global = wg.wrapping_mul(workgroup_size).wrapping_add(local);
+                    let g = match group {
+                        Group::Thread => global,
+                        Group::Warp => global / WARP,
+                        Group::Block(_) => wg,
+                        Group::Grid => 0,
+                    };
+                    GROUP.with(|c| c.set(g));
+                    f(Invocation {
+                        global_index: global,
+                        local_index: local,
+                        workgroup_index: wg,
+                        global_id: UVec3::new(wx * workgroup_size + local, wy, wz),
+                        local_id: UVec3::new(local, 0, 0),
+                        workgroup_id: UVec3::new(wx, wy, wz),
+                        num_workgroups: UVec3::new(gx, gy, gz),
+                        group: g,
+                    });
+                }
+            }
         }
     }
     GROUP.with(|c| c.set(0));

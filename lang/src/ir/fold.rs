@@ -1,8 +1,9 @@
-//! Constant folding of operations whose operands are all literals, with the host's
-//! semantics (integers wrap, shift amounts are masked as on the GPU). It keeps the
-//! emitted WGSL free of constant expressions that WGSL would reject (overflowing
-//! shifts and arithmetic), and keeps shaders small. Results that are not finite
-//! floats are left unfolded.
+//! Constant folding of operations whose operands are all literals, with the language's
+//! semantics (docs/LANGUAGE.md: integers wrap, shift amounts are masked, `x / 0 == x`,
+//! `x % 0 == 0`, `MIN / -1 == MIN`, `MIN % -1 == 0`). It keeps the emitted WGSL free of
+//! constant expressions that WGSL would reject (overflowing shifts and arithmetic, division
+//! by zero, `3.4e38f * 2f`), and keeps shaders small. Float results that are not finite
+//! are written by the caller as bit casts (WGSL has no literal for them).
 
 use naga::{BinaryOperator as B, Literal as L, UnaryOperator as U};
 
@@ -12,8 +13,8 @@ pub(crate) fn binary(op: B, a: L, b: L) -> Option<L> {
             B::Add => L::U32(x.wrapping_add(y)),
             B::Subtract => L::U32(x.wrapping_sub(y)),
             B::Multiply => L::U32(x.wrapping_mul(y)),
-            B::Divide if y != 0 => L::U32(x / y),
-            B::Modulo if y != 0 => L::U32(x % y),
+            B::Divide => L::U32(x.checked_div(y).unwrap_or(x)),
+            B::Modulo => L::U32(if y == 0 { 0 } else { x % y }),
             B::And => L::U32(x & y),
             B::InclusiveOr => L::U32(x | y),
             B::ExclusiveOr => L::U32(x ^ y),
@@ -31,8 +32,8 @@ pub(crate) fn binary(op: B, a: L, b: L) -> Option<L> {
             B::Add => L::I32(x.wrapping_add(y)),
             B::Subtract => L::I32(x.wrapping_sub(y)),
             B::Multiply => L::I32(x.wrapping_mul(y)),
-            B::Divide if y != 0 && !(x == i32::MIN && y == -1) => L::I32(x / y),
-            B::Modulo if y != 0 && !(x == i32::MIN && y == -1) => L::I32(x % y),
+            B::Divide => L::I32(if y == 0 { x } else { x.wrapping_div(y) }),
+            B::Modulo => L::I32(if y == 0 { 0 } else { x.wrapping_rem(y) }),
             B::And => L::I32(x & y),
             B::InclusiveOr => L::I32(x | y),
             B::ExclusiveOr => L::I32(x ^ y),
@@ -63,9 +64,7 @@ pub(crate) fn binary(op: B, a: L, b: L) -> Option<L> {
                 B::GreaterEqual => return Some(L::Bool(x >= y)),
                 _ => return None,
             };
-            if !v.is_finite() {
-                return None;
-            }
+            // Non-finite results are kept: `ops::binary` writes them as bit casts.
             L::F32(v)
         }
         (L::Bool(x), L::Bool(y)) => match op {

@@ -57,7 +57,7 @@ macro_rules! params_tuple {
             #[allow(unused_variables)]
             fn types(m: &mut naga::Module) -> Vec<Handle<naga::Type>> { vec![$($p::arg_type(m)),*] }
             fn handles(self) -> Vec<Handle<Expression>> { vec![$(self.$i.handle()),*] }
-            #[allow(unused_variables)]
+            #[allow(unused_variables, clippy::unused_unit)]
             fn from_handles(h: &[Handle<Expression>]) -> Self { ($($p::from_handle(h[$i]),)*) }
         }
     };

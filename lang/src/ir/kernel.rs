@@ -71,7 +71,7 @@ fn validate_spec(info: &KernelInfo, spec: &Spec) {
     );
     if spec.group == Group::Warp {
         assert!(
-            spec.workgroup_size % crate::spec::WARP == 0,
+            spec.workgroup_size.is_multiple_of(crate::spec::WARP),
             "kernel `{}`: group = Warp needs a workgroup size that is a multiple of 32, not {}",
             info.name,
             spec.workgroup_size
@@ -116,14 +116,59 @@ fn prologue() {
     let nwg = builtin_arg("num_workgroups", BuiltIn::NumWorkGroups, UVEC3);
     let (wg_linear, global) = with(|c| {
         let wgs = c.spec.workgroup_size;
-        let wx = c.expr(Expression::AccessIndex { base: wid, index: 0 });
-        let wy = c.expr(Expression::AccessIndex { base: wid, index: 1 });
-        let nx = c.expr(Expression::AccessIndex { base: nwg, index: 0 });
-        let t = c.expr(Expression::Binary { op: naga::BinaryOperator::Multiply, left: wy, right: nx });
-        let wg_linear = c.expr(Expression::Binary { op: naga::BinaryOperator::Add, left: wx, right: t });
+        // Workgroups are numbered x fastest, then y, then z:
+        // wx + nx * (wy + ny * wz).
+        let wx = c.expr(Expression::AccessIndex {
+            base: wid,
+            index: 0,
+        });
+        let wy = c.expr(Expression::AccessIndex {
+            base: wid,
+            index: 1,
+        });
+        let wz = c.expr(Expression::AccessIndex {
+            base: wid,
+            index: 2,
+        });
+        let nx = c.expr(Expression::AccessIndex {
+            base: nwg,
+            index: 0,
+        });
+        let ny = c.expr(Expression::AccessIndex {
+            base: nwg,
+            index: 1,
+        });
+        let zy = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left: wz,
+            right: ny,
+        });
+        let row = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Add,
+            left: wy,
+            right: zy,
+        });
+        let t = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left: row,
+            right: nx,
+        });
+        let wg_linear = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Add,
+            left: wx,
+            right: t,
+        });
         let size = c.expr(Expression::Literal(naga::Literal::U32(wgs)));
-        let base = c.expr(Expression::Binary { op: naga::BinaryOperator::Multiply, left: wg_linear, right: size });
-        let global = c.expr(Expression::Binary { op: naga::BinaryOperator::Add, left: base, right: local });
+        let base = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left: wg_linear,
+            right: size,
+        });
+        let global = c.expr(Expression::Binary {
+            op: naga::BinaryOperator::Add,
+            left: base,
+            right: local,
+        });
         (wg_linear, global)
     });
     with(|c| {
@@ -149,15 +194,16 @@ pub mod builtin {
     fn uvec3(h: Handle<Expression>) -> Val<UVec3> {
         Val::from_handle(h)
     }
-    /// Linear index of the invocation in the dispatch, also for 2-D grids of workgroups
-    /// (dispatches of more than 65535 workgroups are laid out in rows).
+    /// Linear index of the invocation in the dispatch: `workgroup_index * workgroup_size +
+    /// local_index`, unique in 1-D, 2-D and 3-D dispatches (dispatches of more than 65535
+    /// workgroups are laid out in rows).
     pub fn global_index() -> Val<u32> {
         u32v(with(|c| c.prologue.global_index.expect("prologue")))
     }
     pub fn local_index() -> Val<u32> {
         u32v(with(|c| c.prologue.local_index.expect("prologue")))
     }
-    /// Linear index of the workgroup in the dispatch.
+    /// Linear index of the workgroup in the dispatch: x fastest, then y, then z.
     pub fn workgroup_index() -> Val<u32> {
         u32v(with(|c| c.prologue.workgroup_linear.expect("prologue")))
     }

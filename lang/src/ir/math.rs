@@ -38,17 +38,44 @@ macro_rules! binary_math {
     };
 }
 
-unary_math!(f32; abs => M::Abs, sqrt => M::Sqrt, sin => M::Sin, cos => M::Cos, tan => M::Tan,
-    asin => M::Asin, acos => M::Acos, atan => M::Atan, sinh => M::Sinh, cosh => M::Cosh,
-    tanh => M::Tanh, exp => M::Exp, exp2 => M::Exp2, ln => M::Log, log2 => M::Log2,
-    floor => M::Floor, ceil => M::Ceil, trunc => M::Trunc, to_radians => M::Radians,
-    to_degrees => M::Degrees);
-binary_math!(f32; min => M::Min, max => M::Max, powf => M::Pow, atan2 => M::Atan2);
+unary_math!(f32; abs => M::Abs, floor => M::Floor, ceil => M::Ceil, trunc => M::Trunc,
+    round_ties_even => M::Round, exp => M::Exp, exp2 => M::Exp2);
+
+fn fbits(x: Val<f32>) -> Val<u32> {
+    bitcast(x.h, ScalarKind::Uint)
+}
+fn ffrom_bits(b: Val<u32>) -> Val<f32> {
+    bitcast(b.h, ScalarKind::Float)
+}
+fn or(a: Val<bool>, b: Val<bool>) -> Val<bool> {
+    super::ops::binary(naga::BinaryOperator::LogicalOr, a.h, b.h)
+}
+fn and(a: Val<bool>, b: Val<bool>) -> Val<bool> {
+    super::ops::binary(naga::BinaryOperator::LogicalAnd, a.h, b.h)
+}
+fn not(a: Val<bool>) -> Val<bool> {
+    super::ops::unary(naga::UnaryOperator::LogicalNot, a.h)
+}
 
 impl Val<f32> {
-    pub fn clamp(self, lo: Val<f32>, hi: Val<f32>) -> Val<f32> {
-        math(M::Clamp, &[self.h, lo.h, hi.h])
+    /// `f32::min`: the non-NaN operand when one is NaN (not SPIR-V's `FMin`, which is
+    /// undefined then): `if b < a || a is NaN { b } else { a }`.
+    pub fn min(self, o: Val<f32>) -> Val<f32> {
+        select(or(lt(o, self), self.is_nan()), o, self)
     }
+    /// `f32::max`: the non-NaN operand when one is NaN.
+    pub fn max(self, o: Val<f32>) -> Val<f32> {
+        select(or(super::ops::gt(o, self), self.is_nan()), o, self)
+    }
+    /// `f32::clamp` as std writes it: `if x < lo { x = lo } if x > hi { x = hi }`, so a NaN
+    /// `x` stays NaN. (Rust panics when `lo > hi` or a bound is NaN; kernels cannot panic and
+    /// compute this expression.)
+    pub fn clamp(self, lo: Val<f32>, hi: Val<f32>) -> Val<f32> {
+        let r = select(lt(self, lo), lo, self);
+        select(super::ops::gt(r, hi), hi, r)
+    }
+    /// Rust's `mul_add` is fused (one rounding); naga's `fma`. Vulkan and WGSL allow a driver
+    /// to evaluate it as `a * b + c` (docs/LANGUAGE.md).
     pub fn mul_add(self, a: Val<f32>, b: Val<f32>) -> Val<f32> {
         math(M::Fma, &[self.h, a.h, b.h])
     }
@@ -56,15 +83,19 @@ impl Val<f32> {
     pub fn fract(self) -> Val<f32> {
         self - self.trunc()
     }
-    /// Rust rounds half away from zero (WGSL's `round` rounds half to even).
+    /// Rust rounds half away from zero (WGSL's `round` rounds half to even):
+    /// `t = trunc(x); t + (|x - t| >= 0.5 ? copysign(1, x) : 0)`. `x - t` is exact, so
+    /// 0.49999997 and 8388609 round right (unlike `floor(x + 0.5)`), and the sign of zero is
+    /// kept (`round(-0.4) == -0.0`).
     pub fn round(self) -> Val<f32> {
-        let r = (self.abs() + lit(0.5)).floor();
-        select(lt(self, lit(0.0)), -r, r)
+        let t = self.trunc();
+        let d = (self - t).abs();
+        let step = lit(1.0f32).copysign(self);
+        select(super::ops::ge(d, lit(0.5)), t + step, t)
     }
-    /// Rust's `signum` is ±1 for ±0 (WGSL's `sign(0)` is 0).
+    /// Rust's `signum`: ±1 by the sign bit (so ±1 for ±0), NaN for NaN.
     pub fn signum(self) -> Val<f32> {
-        let neg = bitcast::<u32>(self.h, ScalarKind::Uint) >> lit(31u32);
-        select(super::ops::eq(neg, lit(1u32)), lit(-1.0), lit(1.0))
+        select(self.is_nan(), self, lit(1.0f32).copysign(self))
     }
     pub fn recip(self) -> Val<f32> {
         lit(1.0f32) / self
@@ -72,32 +103,301 @@ impl Val<f32> {
     pub fn sqrt_recip(self) -> Val<f32> {
         math(M::InverseSqrt, &[self.h])
     }
-    pub fn powi(self, n: Val<i32>) -> Val<f32> {
-        math(M::Pow, &[self.h, cast::<f32, i32>(n).h])
+    /// `sqrt`; GLSL's is undefined below zero: NaN there (as Rust), and `sqrt(-0.0) == -0.0`.
+    pub fn sqrt(self) -> Val<f32> {
+        let r: Val<f32> = math(M::Sqrt, &[self.h]);
+        let r = select(super::ops::eq(self, lit(0.0)), self, r);
+        select(lt(self, lit(0.0)), lit(f32::NAN), r)
     }
+    /// `ln`/`log2`: GLSL's are undefined at and below zero: `-inf` at ±0, NaN below (as Rust).
+    fn log_guarded(self, f: M) -> Val<f32> {
+        let r: Val<f32> = math(f, &[self.h]);
+        let r = select(super::ops::eq(self, lit(0.0)), lit(f32::NEG_INFINITY), r);
+        select(or(lt(self, lit(0.0)), self.is_nan()), lit(f32::NAN), r)
+    }
+    pub fn ln(self) -> Val<f32> {
+        self.log_guarded(M::Log)
+    }
+    pub fn log2(self) -> Val<f32> {
+        self.log_guarded(M::Log2)
+    }
+    /// An odd function with `f(±0) == ±0` (`sin`, `tan`, `asin`, `atan`, `sinh`, `tanh`):
+    /// ±0 and NaN pass through unchanged (drivers drop the sign of zero and may turn NaN
+    /// into a number).
+    fn odd_guarded(self, r: Val<f32>) -> Val<f32> {
+        select(or(super::ops::eq(self, lit(0.0)), self.is_nan()), self, r)
+    }
+    /// `sin`/`cos`/`tan` of ±inf are NaN in Rust; GLSL leaves them undefined.
+    fn trig_guarded(self, f: M) -> Val<f32> {
+        let r: Val<f32> = math(f, &[self.h]);
+        select(self.is_finite(), r, lit(f32::NAN))
+    }
+    pub fn sin(self) -> Val<f32> {
+        self.odd_guarded(self.trig_guarded(M::Sin))
+    }
+    pub fn cos(self) -> Val<f32> {
+        self.trig_guarded(M::Cos)
+    }
+    pub fn tan(self) -> Val<f32> {
+        self.odd_guarded(self.trig_guarded(M::Tan))
+    }
+    /// `asin`/`acos` outside [-1, 1] are NaN in Rust; GLSL leaves them undefined.
+    fn arc_guarded(self, f: M) -> Val<f32> {
+        let r: Val<f32> = math(f, &[self.h]);
+        select(super::ops::le(self.abs(), lit(1.0)), r, lit(f32::NAN))
+    }
+    pub fn asin(self) -> Val<f32> {
+        self.odd_guarded(self.arc_guarded(M::Asin))
+    }
+    pub fn acos(self) -> Val<f32> {
+        self.arc_guarded(M::Acos)
+    }
+    pub fn atan(self) -> Val<f32> {
+        self.odd_guarded(math(M::Atan, &[self.h]))
+    }
+    pub fn tanh(self) -> Val<f32> {
+        self.odd_guarded(math(M::Tanh, &[self.h]))
+    }
+    /// `sinh`/`cosh`: drivers compute `(e^x ∓ e^-x) / 2`, which overflows for |x| > 88.7
+    /// while the result is finite up to |x| < 89.4: there, `e^(|x| - ln 2)`.
+    fn hyperbolic_large(self) -> (Val<bool>, Val<f32>) {
+        let ax = self.abs();
+        (
+            super::ops::gt(ax, lit(88.0)),
+            (ax - lit(std::f32::consts::LN_2)).exp(),
+        )
+    }
+    pub fn sinh(self) -> Val<f32> {
+        let (large, big) = self.hyperbolic_large();
+        let r = select(large, big.copysign(self), math(M::Sinh, &[self.h]));
+        self.odd_guarded(r)
+    }
+    pub fn cosh(self) -> Val<f32> {
+        let (large, big) = self.hyperbolic_large();
+        select(
+            or(large, self.is_nan()),
+            select(self.is_nan(), self, big),
+            math(M::Cosh, &[self.h]),
+        )
+    }
+    /// Rust's `atan2` (C's `atan2f`): odd in `self` (so the sign of a zero `self` is kept),
+    /// with C's values where GLSL's `atan` is undefined or loses them: `self == ±0`
+    /// (±0 or ±π by the sign of `x`), infinities (±π/4, ±3π/4, ±π/2, ±0, ±π) and NaN.
+    pub fn atan2(self, x: Val<f32>) -> Val<f32> {
+        use super::ops::eq;
+        use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+        let y = self;
+        let ay = y.abs();
+        let inf = lit(f32::INFINITY);
+        let core: Val<f32> = math(M::Atan2, &[ay.h, x.h]);
+        let x_neg = x.is_sign_negative();
+        let r = select(eq(ay, lit(0.0)), select(x_neg, lit(PI), lit(0.0f32)), core);
+        let y_inf = eq(ay, inf);
+        let x_inf = eq(x.abs(), inf);
+        let r = select(
+            and(x_inf, not(y_inf)),
+            select(x_neg, lit(PI), lit(0.0f32)),
+            r,
+        );
+        let both = select(x_neg, lit(3.0 * FRAC_PI_4), lit(FRAC_PI_4));
+        let r = select(y_inf, select(x_inf, both, lit(FRAC_PI_2)), r);
+        let r = r.copysign(y);
+        select(or(x.is_nan(), y.is_nan()), lit(f32::NAN), r)
+    }
+    /// Rust's `to_degrees`: `x * 57.29578` (one rounding, the same constant).
+    pub fn to_degrees(self) -> Val<f32> {
+        self * lit(57.295_78_f32)
+    }
+    /// Rust's `to_radians`: `x * (PI / 180.0)` with the quotient rounded to `f32`.
+    pub fn to_radians(self) -> Val<f32> {
+        self * lit(std::f32::consts::PI / 180.0f32)
+    }
+    /// Rust's `powi` (LLVM's `__powisf2`): square-and-multiply over the bits of `|n|`, then
+    /// `1 / r` for negative `n`, so the GPU rounds exactly as the host does.
+    pub fn powi(self, n: Val<i32>) -> Val<f32> {
+        use super::control::{break_, if_, loop_};
+        use super::val::Var;
+        let neg = lt(n, lit(0i32));
+        let b = Var::new("powi_n", n);
+        let a = Var::new("powi_a", self);
+        let r = Var::new("powi_r", lit(1.0f32));
+        loop_(|| {
+            let bv = b.get();
+            if_(
+                super::ops::ne(bv & lit(1i32), lit(0i32)),
+                || r.set(r.get() * a.get()),
+                || {},
+            );
+            // `b /= 2` truncates toward zero, as in C.
+            let half = bv / lit(2i32);
+            b.set(half);
+            if_(super::ops::eq(half, lit(0i32)), break_, || {});
+            a.set(a.get() * a.get());
+        });
+        select(neg, lit(1.0f32) / r.get(), r.get())
+    }
+    /// Rust's `powf` (C's `powf`): the special cases of C99 Annex F exactly (`x^0 == 1`,
+    /// `1^y == 1`, NaN, zeros, infinities, negative bases with integer exponents); other
+    /// values through `pow(|x|, y)` (GLSL's, defined for `|x| > 0`), within the driver's
+    /// precision (docs/LANGUAGE.md).
+    pub fn powf(self, y: Val<f32>) -> Val<f32> {
+        use super::ops::{eq, gt};
+        let x = self;
+        let ax = x.abs();
+        let ay = y.abs();
+        let inf = lit(f32::INFINITY);
+        let y_int = eq(y.trunc(), y);
+        // |y| >= 2^24 is an even integer; below, test the low bit of the integer value.
+        let y_odd = and(
+            and(y_int, lt(ay, lit(16777216.0f32))),
+            eq(cast::<u32, i32>(cast::<i32, f32>(y)) & lit(1u32), lit(1u32)),
+        );
+        let x_neg = x.is_sign_negative();
+        let base_ok = and(gt(ax, lit(0.0)), lt(ax, inf));
+        let safe = select(base_ok, ax, lit(1.0f32));
+        let core: Val<f32> = math(M::Pow, &[safe.h, y.h]);
+        let y_neg = lt(y, lit(0.0));
+        // |x| = 0: +inf for y < 0, +0 for y > 0; |x| = inf: the reverse.
+        let mag = select(eq(ax, lit(0.0)), select(y_neg, inf, lit(0.0f32)), core);
+        let mag = select(eq(ax, inf), select(y_neg, lit(0.0f32), inf), mag);
+        // y = ±inf: 1 for |x| == 1, else 0 or inf by whether |x| < 1 and y < 0 agree.
+        let y_inf = eq(ay, inf);
+        let grows = eq(lt(ax, lit(1.0)), y_neg);
+        let mag = select(
+            y_inf,
+            select(
+                eq(ax, lit(1.0)),
+                lit(1.0f32),
+                select(grows, inf, lit(0.0f32)),
+            ),
+            mag,
+        );
+        // The sign: negative base to an odd integer power.
+        let r = select(and(x_neg, y_odd), -mag, mag);
+        // NaN: a NaN operand, or a finite negative base to a non-integer power.
+        let neg_base_frac = and(and(lt(x, lit(0.0)), x.is_finite()), not(y_int));
+        let r = select(
+            or(or(x.is_nan(), y.is_nan()), neg_base_frac),
+            lit(f32::NAN),
+            r,
+        );
+        // x^1 == x exactly (drivers' exp2(log2(x)) is not), x^±0 == 1 and 1^y == 1, even
+        // for NaN.
+        let r = select(eq(y, lit(1.0)), x, r);
+        select(or(eq(y, lit(0.0)), eq(x, lit(1.0))), lit(1.0f32), r)
+    }
+    /// `is_nan`, `is_finite`, `is_infinite`, ...: tests on the bits, which drivers cannot
+    /// fold away under "no NaN/inf" fast-math assumptions.
     pub fn is_nan(self) -> Val<bool> {
-        super::ops::ne(self, self)
+        Val::from_handle(with(|c| super::ops::is_nan_bits(c, self.h, None)))
     }
     pub fn is_finite(self) -> Val<bool> {
-        lt(self.abs(), lit(f32::INFINITY))
+        lt(fbits(self) & lit(0x7fff_ffffu32), lit(0x7f80_0000u32))
+    }
+    pub fn is_infinite(self) -> Val<bool> {
+        super::ops::eq(fbits(self) & lit(0x7fff_ffffu32), lit(0x7f80_0000u32))
+    }
+    pub fn is_normal(self) -> Val<bool> {
+        let e = fbits(self) & lit(0x7f80_0000u32);
+        and(
+            super::ops::ne(e, lit(0u32)),
+            super::ops::ne(e, lit(0x7f80_0000u32)),
+        )
+    }
+    pub fn is_subnormal(self) -> Val<bool> {
+        let b = fbits(self);
+        and(
+            super::ops::eq(b & lit(0x7f80_0000u32), lit(0u32)),
+            super::ops::ne(b & lit(0x007f_ffffu32), lit(0u32)),
+        )
     }
     pub fn is_sign_negative(self) -> Val<bool> {
-        super::ops::eq(bitcast::<u32>(self.h, ScalarKind::Uint) >> lit(31u32), lit(1u32))
+        super::ops::ne(fbits(self) & lit(0x8000_0000u32), lit(0u32))
+    }
+    pub fn is_sign_positive(self) -> Val<bool> {
+        super::ops::eq(fbits(self) & lit(0x8000_0000u32), lit(0u32))
     }
     pub fn copysign(self, sign: Val<f32>) -> Val<f32> {
-        let mag = bitcast::<u32>(self.h, ScalarKind::Uint) & lit(0x7fff_ffffu32);
-        let s = bitcast::<u32>(sign.h, ScalarKind::Uint) & lit(0x8000_0000u32);
-        bitcast((mag | s).h, ScalarKind::Float)
+        let mag = fbits(self) & lit(0x7fff_ffffu32);
+        let s = fbits(sign) & lit(0x8000_0000u32);
+        ffrom_bits(mag | s)
     }
     pub fn to_bits(self) -> Val<u32> {
-        bitcast(self.h, ScalarKind::Uint)
+        fbits(self)
     }
     pub fn from_bits(bits: Val<u32>) -> Val<f32> {
-        bitcast(bits.h, ScalarKind::Float)
+        ffrom_bits(bits)
     }
+    /// glam's `FloatExt::lerp`: `self * (1 - t) + to * t`.
     pub fn lerp(self, to: Val<f32>, t: Val<f32>) -> Val<f32> {
-        math(M::Mix, &[self.h, to.h, t.h])
+        self * (lit(1.0f32) - t) + to * t
     }
+}
+
+/// Rust's `%` on `f32` (C's `fmodf`), exact: one naga function per module, `cohort_fmod`.
+/// |x| and |y| as integer significands `mx`, `my` and exponents; the remainder of
+/// `mx * 2^(ex - ey)` by `my` is computed 8 bits at a time with exact `u32` `%`
+/// (`r < my < 2^24`, so `r << 8` fits), then packed with `y`'s exponent: the result is
+/// exactly representable, so no rounding occurs. Special cases as C: NaN for `y == 0`,
+/// NaN operands and infinite `x`; `x` itself when `|x| < |y|` (so `x % inf == x`).
+pub(crate) fn fmod(x: Val<f32>, y: Val<f32>) -> Val<f32> {
+    struct FmodKey;
+    super::function::function::<FmodKey, _, _>(
+        "cohort_fmod",
+        &["x", "y"],
+        (x, y),
+        |(x, y): (Val<f32>, Val<f32>)| {
+            use super::control::{break_, if_, loop_};
+            use super::ops::{eq, ge, gt};
+            use super::val::Var;
+            let (ux, uy) = (fbits(x), fbits(y));
+            let sx = ux & lit(0x8000_0000u32);
+            let ax = ux & lit(0x7fff_ffffu32);
+            let ay = uy & lit(0x7fff_ffffu32);
+            let nan_case = or(
+                or(eq(ay, lit(0u32)), gt(ay, lit(0x7f80_0000u32))),
+                ge(ax, lit(0x7f80_0000u32)),
+            );
+            let small = lt(ax, ay);
+            let equal = eq(ax, ay);
+            let general = not(or(or(nan_case, small), equal));
+            let ex = ax >> lit(23u32);
+            let ey = ay >> lit(23u32);
+            let mx = select(
+                eq(ex, lit(0u32)),
+                ax,
+                (ax & lit(0x007f_ffffu32)) | lit(0x0080_0000u32),
+            );
+            let my = select(
+                eq(ey, lit(0u32)),
+                ay,
+                (ay & lit(0x007f_ffffu32)) | lit(0x0080_0000u32),
+            );
+            let ex = ex.max(lit(1u32));
+            let ey = ey.max(lit(1u32));
+            // my is 0 only when y == 0 (then `nan_case`); integer `% 0` is defined (0) anyway.
+            let d = Var::new("fmod_d", select(general, ex - ey, lit(0u32)));
+            let r = Var::new("fmod_r", mx % my);
+            loop_(|| {
+                let dv = d.get();
+                if_(eq(dv, lit(0u32)), break_, || {});
+                let s = dv.min(lit(8u32));
+                r.set((r.get() << s) % my);
+                d.set(dv - s);
+            });
+            let rr = r.get();
+            // Normalise: the leading bit of rr to bit 23; the biased exponent is then ey - sh.
+            let sh = rr.leading_zeros() - lit(8u32);
+            let normal = ((ey - sh) << lit(23u32)) | ((rr << sh) & lit(0x007f_ffffu32));
+            let subnormal = rr << (ey - lit(1u32));
+            let mag = select(super::ops::le(ey, sh), subnormal, normal);
+            let mag = select(eq(rr, lit(0u32)), lit(0u32), mag);
+            let res = ffrom_bits(mag | sx);
+            let res = select(small, x, res);
+            let res = select(equal, ffrom_bits(sx), res);
+            select(nan_case, lit(f32::NAN), res)
+        },
+    )
 }
 
 macro_rules! int_methods {
@@ -170,6 +470,22 @@ impl Val<bool> {
     }
 }
 
+fn float_vec_to_int<R>(v: Handle<Expression>, kind: ScalarKind, size: VectorSize) -> Val<R> {
+    let converted = with(|c| {
+        c.expr(Expression::As {
+            expr: v,
+            kind,
+            convert: Some(4),
+        })
+    });
+    Val::from_handle(super::ops::saturate_float_to_int(
+        v,
+        converted,
+        kind,
+        Some(size),
+    ))
+}
+
 fn compose<T: GpuType>(parts: &[Handle<Expression>]) -> Val<T> {
     Val::from_handle(with(|c| {
         let ty = T::naga_type(&mut c.module);
@@ -181,29 +497,79 @@ fn swizzle<R>(v: Handle<Expression>, size: VectorSize, pattern: [naga::SwizzleCo
     Val::from_handle(with(|c| c.expr(Expression::Swizzle { size, vector: v, pattern })))
 }
 
+/// glam's `min`/`max` closures (`if a < b { a } else { b }`): with a NaN operand they give
+/// the second operand. Used by float vector `min`, `max`, `clamp` and `*_element`.
+fn glam_min<T>(a: Val<T>, b: Val<T>) -> Val<T> {
+    select(
+        Val::from_handle(super::ops::binary::<bool>(naga::BinaryOperator::Less, a.h, b.h).h),
+        a,
+        b,
+    )
+}
+fn glam_max<T>(a: Val<T>, b: Val<T>) -> Val<T> {
+    select(
+        Val::from_handle(super::ops::binary::<bool>(naga::BinaryOperator::Greater, a.h, b.h).h),
+        a,
+        b,
+    )
+}
+
+/// glam computes `Vec4`'s horizontal operations pairwise with SSE2 on x86
+/// (`op(op(x, z), op(y, w))`, `(x + y) + (z + w)`) and left to right elsewhere; the IR
+/// follows the host's order so that results agree bit for bit.
+const VEC4_PAIRWISE: bool = cfg!(all(
+    any(target_arch = "x86", target_arch = "x86_64"),
+    target_feature = "sse2"
+));
+
+fn horizontal<S>(v: &[Val<S>], op: impl Fn(Val<S>, Val<S>) -> Val<S>, pairwise4: bool) -> Val<S> {
+    match v.len() {
+        4 if pairwise4 && VEC4_PAIRWISE => op(op(v[0], v[2]), op(v[1], v[3])),
+        _ => {
+            let mut it = v.iter().rev().copied();
+            let last = it.next().unwrap();
+            it.fold(last, |acc, x| op(x, acc))
+        }
+    }
+}
+
 macro_rules! vec_common {
-    ($v:ty, $s:ty, $n:expr, [$($c:ident),+]) => {
+    ($v:ty, $s:ty, $n:expr, [$($c:ident),+], $float:expr) => {
         impl Val<$v> {
             pub fn new($($c: Val<$s>),+) -> Val<$v> { compose(&[$($c.h),+]) }
             pub fn splat(x: Val<$s>) -> Val<$v> { Val::from_handle(splat($n, x)) }
-            pub fn min(self, o: Val<$v>) -> Val<$v> { math(M::Min, &[self.h, o.h]) }
-            pub fn max(self, o: Val<$v>) -> Val<$v> { math(M::Max, &[self.h, o.h]) }
-            pub fn clamp(self, lo: Val<$v>, hi: Val<$v>) -> Val<$v> { math(M::Clamp, &[self.h, lo.h, hi.h]) }
-            pub fn min_element(self) -> Val<$s> { let v = [$(super::val::field(self, |s: &$v| &s.$c)),+]; v.into_iter().reduce(|a, b| a.min(b)).unwrap() }
-            pub fn max_element(self) -> Val<$s> { let v = [$(super::val::field(self, |s: &$v| &s.$c)),+]; v.into_iter().reduce(|a, b| a.max(b)).unwrap() }
-            pub fn element_sum(self) -> Val<$s> { let v = [$(super::val::field(self, |s: &$v| &s.$c)),+]; v.into_iter().reduce(|a, b| a + b).unwrap() }
+            /// Per component `if a < b { a } else { b }` (glam).
+            pub fn min(self, o: Val<$v>) -> Val<$v> { if $float { glam_min(self, o) } else { math(M::Min, &[self.h, o.h]) } }
+            pub fn max(self, o: Val<$v>) -> Val<$v> { if $float { glam_max(self, o) } else { math(M::Max, &[self.h, o.h]) } }
+            /// glam: `self.max(lo).min(hi)`.
+            pub fn clamp(self, lo: Val<$v>, hi: Val<$v>) -> Val<$v> { self.max(lo).min(hi) }
+            pub fn min_element(self) -> Val<$s> {
+                let v = [$(super::val::field(self, |s: &$v| &s.$c)),+];
+                if $float { horizontal(&v, glam_min, true) } else { horizontal(&v, |a, b| math(M::Min, &[a.h, b.h]), false) }
+            }
+            pub fn max_element(self) -> Val<$s> {
+                let v = [$(super::val::field(self, |s: &$v| &s.$c)),+];
+                if $float { horizontal(&v, glam_max, true) } else { horizontal(&v, |a, b| math(M::Max, &[a.h, b.h]), false) }
+            }
+            pub fn element_sum(self) -> Val<$s> {
+                let v = [$(super::val::field(self, |s: &$v| &s.$c)),+];
+                match v.as_slice() {
+                    [x, y, z, w] if $float && VEC4_PAIRWISE => (*x + *y) + (*z + *w),
+                    _ => v.into_iter().reduce(|a, b| a + b).unwrap(),
+                }
+            }
         }
     };
 }
-vec_common!(Vec2, f32, VectorSize::Bi, [x, y]);
-vec_common!(Vec3, f32, VectorSize::Tri, [x, y, z]);
-vec_common!(Vec4, f32, VectorSize::Quad, [x, y, z, w]);
-vec_common!(UVec2, u32, VectorSize::Bi, [x, y]);
-vec_common!(UVec3, u32, VectorSize::Tri, [x, y, z]);
-vec_common!(UVec4, u32, VectorSize::Quad, [x, y, z, w]);
-vec_common!(IVec2, i32, VectorSize::Bi, [x, y]);
-vec_common!(IVec3, i32, VectorSize::Tri, [x, y, z]);
-vec_common!(IVec4, i32, VectorSize::Quad, [x, y, z, w]);
+vec_common!(Vec2, f32, VectorSize::Bi, [x, y], true);
+vec_common!(Vec3, f32, VectorSize::Tri, [x, y, z], true);
+vec_common!(Vec4, f32, VectorSize::Quad, [x, y, z, w], true);
+vec_common!(UVec2, u32, VectorSize::Bi, [x, y], false);
+vec_common!(UVec3, u32, VectorSize::Tri, [x, y, z], false);
+vec_common!(UVec4, u32, VectorSize::Quad, [x, y, z, w], false);
+vec_common!(IVec2, i32, VectorSize::Bi, [x, y], false);
+vec_common!(IVec3, i32, VectorSize::Tri, [x, y, z], false);
+vec_common!(IVec4, i32, VectorSize::Quad, [x, y, z, w], false);
 
 macro_rules! vec_float {
     ($($v:ty),*) => {$(
@@ -219,7 +585,8 @@ macro_rules! vec_float {
             pub fn ceil(self) -> Val<$v> { math(M::Ceil, &[self.h]) }
             pub fn recip(self) -> Val<$v> { lit(1.0f32) / self }
             pub fn mul_add(self, a: Val<$v>, b: Val<$v>) -> Val<$v> { math(M::Fma, &[self.h, a.h, b.h]) }
-            pub fn lerp(self, to: Val<$v>, t: Val<f32>) -> Val<$v> { self + (to - self) * t }
+            /// glam: `self * (1 - t) + to * t`.
+            pub fn lerp(self, to: Val<$v>, t: Val<f32>) -> Val<$v> { self * (lit(1.0f32) - t) + to * t }
             pub fn reflect(self, normal: Val<$v>) -> Val<$v> { math(M::Reflect, &[self.h, normal.h]) }
         }
     )*};
@@ -240,11 +607,12 @@ impl Val<Vec3> {
     pub fn xy(self) -> Val<Vec2> {
         self.truncate()
     }
+    /// Per component `x as u32` (saturating, NaN → 0), as glam.
     pub fn as_uvec3(self) -> Val<UVec3> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Uint, convert: Some(4) })))
+        float_vec_to_int(self.h, ScalarKind::Uint, VectorSize::Tri)
     }
     pub fn as_ivec3(self) -> Val<IVec3> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Sint, convert: Some(4) })))
+        float_vec_to_int(self.h, ScalarKind::Sint, VectorSize::Tri)
     }
     pub fn any_orthonormal_vector(self) -> Val<Vec3> {
         // Duff et al. 2017, as glam does it.
@@ -276,22 +644,40 @@ impl Val<Vec2> {
         compose(&[self.h, z.h])
     }
     pub fn perp_dot(self, o: Val<Vec2>) -> Val<f32> {
-        let (ax, ay) = (super::val::field(self, |s: &Vec2| &s.x), super::val::field(self, |s: &Vec2| &s.y));
-        let (bx, by) = (super::val::field(o, |s: &Vec2| &s.x), super::val::field(o, |s: &Vec2| &s.y));
+        let (ax, ay) = (
+            super::val::field(self, |s: &Vec2| &s.x),
+            super::val::field(self, |s: &Vec2| &s.y),
+        );
+        let (bx, by) = (
+            super::val::field(o, |s: &Vec2| &s.x),
+            super::val::field(o, |s: &Vec2| &s.y),
+        );
         ax * by - ay * bx
     }
     pub fn as_uvec2(self) -> Val<UVec2> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Uint, convert: Some(4) })))
+        float_vec_to_int(self.h, ScalarKind::Uint, VectorSize::Bi)
     }
 }
 impl Val<UVec2> {
     pub fn as_vec2(self) -> Val<Vec2> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Float, convert: Some(4) })))
+        Val::from_handle(with(|c| {
+            c.expr(Expression::As {
+                expr: self.h,
+                kind: ScalarKind::Float,
+                convert: Some(4),
+            })
+        }))
     }
 }
 impl Val<UVec3> {
     pub fn as_vec3(self) -> Val<Vec3> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Float, convert: Some(4) })))
+        Val::from_handle(with(|c| {
+            c.expr(Expression::As {
+                expr: self.h,
+                kind: ScalarKind::Float,
+                convert: Some(4),
+            })
+        }))
     }
     pub fn extend(self, w: Val<u32>) -> Val<UVec4> {
         compose(&[self.h, w.h])

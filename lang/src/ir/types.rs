@@ -44,6 +44,24 @@ pub trait ConstValue: GpuType {
     fn build(&self) -> Handle<naga::Expression>;
 }
 
+/// The expression for a scalar constant. WGSL has no literal for infinities and NaN
+/// (naga rejects `Literal(F32(inf))`), so a non-finite `f32` is the bit cast of its `u32`
+/// bits (`bitcast<f32>(0x7f800000u)`), which keeps its exact bits (NaN payload and sign
+/// included) on both backends.
+pub(crate) fn literal_expr(l: naga::Literal) -> Handle<naga::Expression> {
+    crate::ir::builder::with(|c| match l {
+        naga::Literal::F32(v) if !v.is_finite() => {
+            let bits = c.expr(naga::Expression::Literal(naga::Literal::U32(v.to_bits())));
+            c.expr(naga::Expression::As {
+                expr: bits,
+                kind: naga::ScalarKind::Float,
+                convert: None,
+            })
+        }
+        l => c.expr(naga::Expression::Literal(l)),
+    })
+}
+
 fn scalar_ty(m: &mut Module, s: Scalar) -> Handle<Type> {
     m.types.insert(Type { name: None, inner: TypeInner::Scalar(s) }, Span::UNDEFINED)
 }
@@ -67,8 +85,7 @@ macro_rules! scalar {
         }
         impl ConstValue for $t {
             fn build(&self) -> Handle<naga::Expression> {
-                let l = self.literal();
-                crate::ir::builder::with(|c| c.expr(naga::Expression::Literal(l)))
+                literal_expr(self.literal())
             }
         }
     };

@@ -37,8 +37,7 @@ impl<T> Val<T> {
 /// A literal in kernel source: `lit(2.0)` becomes an `f32` literal when the context
 /// wants an `f32`.
 pub fn lit<T: ScalarType>(v: T) -> Val<T> {
-    let l = v.literal();
-    Val::from_handle(with(|c| c.expr(Expression::Literal(l))))
+    Val::from_handle(super::types::literal_expr(v.literal()))
 }
 
 /// Lifts a host value that the kernel reads as a constant (a `const` item, an

@@ -8,6 +8,7 @@ pub mod group_pick;
 pub mod group_vote;
 pub mod histogram;
 pub mod mathfns;
+pub mod numeric;
 pub mod rays;
 pub mod reduce;
 pub mod saxpy;
