@@ -291,6 +291,11 @@ pub fn specs(device: &cohort::runtime::Device) -> Specs {
     }
 }
 
+/// The three kernels' compiled artifacts (to prepare their pipelines ahead of use).
+pub fn artifacts(specs: &Specs) -> Result<Vec<std::sync::Arc<cohort::runtime::KernelArtifact>>, cohort::emit::CompileError> {
+    Ok(vec![compact_count::artifact(&specs.count)?, compact_offsets::artifact(&specs.offsets)?, compact_scatter::artifact(&specs.scatter)?])
+}
+
 /// Records the compaction of up to `n` rays (`count[0] <= n` are compacted) into
 /// `batch`: [`DISPATCHES`] dispatches, in order. `scratch` needs [`scratch_len`]`(n)`
 /// elements; `out` receives the partition of `idrays` and `total[0]` the number of

@@ -17,6 +17,9 @@ pub struct GpuScene {
     pub light_count: u32,
     /// Probability that a light sample goes to the environment.
     pub env_light: f32,
+    /// Host time spent building the BVHs (zero when built elsewhere) and uploading.
+    pub bvh_build: std::time::Duration,
+    pub upload: std::time::Duration,
     /// The same tree as `nodes` collapsed to 8-wide nodes (`cohort_scenes::GpuBvh8`), over the
     /// same `triangles`, for `traverse_wide::traverse8`; `None` where the tree may need more
     /// stack than that kernel has (then use `traverse::traverse`).
@@ -54,6 +57,7 @@ impl GpuScene {
         wide: Option<&GpuBvh8>,
     ) -> Result<GpuScene, RuntimeError> {
         let nodes: &[BvhNode] = bytemuck::cast_slice(&bvh.nodes);
+        let started = std::time::Instant::now();
         let mut tris: Vec<Triangle> = bytemuck::cast_slice(&bvh.triangles).to_vec();
         let lights = crate::lights::build(scene, &mut tris);
         let mats = scene.gpu_materials();
@@ -66,6 +70,8 @@ impl GpuScene {
             lights: device.upload(&lights.entries)?,
             light_count: lights.count,
             env_light: lights.env_light,
+            bvh_build: std::time::Duration::ZERO,
+            upload: started.elapsed(),
             nodes8: match wide {
                 Some(w) => Some(device.upload::<WideNode>(bytemuck::cast_slice(&w.nodes))?),
                 None => None,

@@ -174,6 +174,8 @@ pub enum RenderError {
     Runtime(#[from] RuntimeError),
     #[error(transparent)]
     Kernel(#[from] cohort::Error),
+    #[error(transparent)]
+    Compile(#[from] cohort::emit::CompileError),
     #[error("cannot build the BVH: {0}")]
     Bvh(String),
     #[error("{0}")]
@@ -274,6 +276,19 @@ pub struct Renderer<'d> {
     opts: RenderOptions,
     /// The run in progress: `None` until `start`.
     run: Option<Run>,
+    startup: Startup,
+}
+
+/// Where the time before the first iteration went (the scene's share is measured by
+/// `GpuScene::prepare`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Startup {
+    /// BVH build (binary and 8-wide) on the host.
+    pub bvh_build: Duration,
+    /// Uploading the scene and allocating the path state.
+    pub upload: Duration,
+    /// Pipeline creation of the kernels the options use (prepared before any render).
+    pub pipelines: Duration,
 }
 
 /// What a run carries from one `advance` to the next.
@@ -354,6 +369,7 @@ impl<'d> Renderer<'d> {
             ..Default::default()
         };
         apply_options(&mut frame, &opts);
+        let allocated = Instant::now();
         let n = n as usize;
         let slot_to_pixel = slot_order(w, h, opts.interleave);
         let blocks = compact::scratch_len(n);
@@ -376,15 +392,15 @@ impl<'d> Renderer<'d> {
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
         };
-        Ok(Renderer {
-            device,
-            scene: gpu,
-            frame,
-            paths,
-            slot_to_pixel,
-            opts,
-            run: None,
-        })
+        let startup = Startup { bvh_build: gpu.bvh_build, upload: gpu.upload + allocated.elapsed(), pipelines: Duration::ZERO };
+        let mut r = Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts, run: None, startup };
+        r.with_kernels(Prepare)?;
+        Ok(r)
+    }
+
+    /// Where the time before the first iteration went.
+    pub fn startup(&self) -> Startup {
+        self.startup
     }
 
     /// Takes new options for the next run, keeping the scene, the image size and every
@@ -410,7 +426,7 @@ impl<'d> Renderer<'d> {
         apply_options(&mut self.frame, &opts);
         self.opts = opts;
         self.run = None;
-        Ok(())
+        self.with_kernels(Prepare)
     }
 
     /// Changes the budget of the next `render` or `start` (e.g. a short unmeasured
@@ -447,7 +463,7 @@ impl<'d> Renderer<'d> {
         mut progress: impl FnMut(f64, &RenderStats),
     ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
-        let stats = self.advance_sampled::<S>(self.opts.budget, &mut progress)?;
+        let stats = self.with_sampler::<S, _>(Advance { until: self.opts.budget, progress: &mut progress })?;
         Ok((self.image()?, stats))
     }
 
@@ -507,37 +523,69 @@ impl<'d> Renderer<'d> {
         until: Budget,
         mut progress: impl FnMut(f64, &RenderStats),
     ) -> Result<RenderStats, RenderError> {
+        self.with_kernels(Advance { until, progress: &mut progress })
+    }
+
+    /// Runs `op` with the kernel types of the current options: the diffuse strategy `S`,
+    /// the path-end policy `E` and the integrator `I` are chosen here, once, from the
+    /// options, for every operation that needs them.
+    fn with_kernels<O: KernelOp>(&mut self, op: O) -> O::Out {
         match (self.opts.algorithm.coherent, self.opts.in_patch) {
-            (false, _) => self.advance_sampled::<Cosine>(until, &mut progress),
-            (true, InPatch::Uniform) => {
-                self.advance_sampled::<CoherentUniform>(until, &mut progress)
-            }
-            (true, InPatch::Cosine) => self.advance_sampled::<CoherentCosine>(until, &mut progress),
-            (true, InPatch::EqualArea) => {
-                self.advance_sampled::<CoherentEqualArea>(until, &mut progress)
-            }
+            (false, _) => self.with_sampler::<Cosine, O>(op),
+            (true, InPatch::Uniform) => self.with_sampler::<CoherentUniform, O>(op),
+            (true, InPatch::Cosine) => self.with_sampler::<CoherentCosine, O>(op),
+            (true, InPatch::EqualArea) => self.with_sampler::<CoherentEqualArea, O>(op),
         }
     }
 
-    fn advance_sampled<S: DiffuseSampler>(
-        &mut self,
-        until: Budget,
-        progress: &mut dyn FnMut(f64, &RenderStats),
-    ) -> Result<RenderStats, RenderError> {
-        match (self.opts.whole_group_end.is_some(), self.opts.integrator) {
-            (true, IntegratorKind::Path) => {
-                self.advance_kernels::<S, WholeGroup, Implicit>(until, progress)
-            }
-            (false, IntegratorKind::Path) => {
-                self.advance_kernels::<S, EachPath, Implicit>(until, progress)
-            }
-            (true, IntegratorKind::Nee) => {
-                self.advance_kernels::<S, WholeGroup, NextEvent>(until, progress)
-            }
-            (false, IntegratorKind::Nee) => {
-                self.advance_kernels::<S, EachPath, NextEvent>(until, progress)
-            }
+    fn with_sampler<S: DiffuseSampler, O: KernelOp>(&mut self, op: O) -> O::Out {
+        match self.opts.whole_group_end {
+            Some(_) => self.with_end::<S, WholeGroup, O>(op),
+            None => self.with_end::<S, EachPath, O>(op),
         }
+    }
+
+    fn with_end<S: DiffuseSampler, E: PathEnd, O: KernelOp>(&mut self, op: O) -> O::Out {
+        match self.opts.integrator {
+            IntegratorKind::Path => op.run::<S, E, Implicit>(self),
+            IntegratorKind::Nee => op.run::<S, E, NextEvent>(self),
+        }
+    }
+
+    /// The specialisations of every kernel an iteration may record, for this device and
+    /// the options' group level.
+    fn specs(&self) -> Specs {
+        let d = self.device;
+        Specs {
+            traverse: traverse::spec(d, None),
+            traverse8: traverse8::spec(d, None),
+            extend: extend::spec(d, Some(self.opts.algorithm.group)),
+            shadow: trace_shadow::spec(d, None),
+            shadow8: trace_shadow8::spec(d, None),
+            compact: compact::specs(d),
+        }
+    }
+
+    /// Compiles the pipelines of every kernel the options use (driver compilation, which
+    /// the on-disk pipeline cache shortens on later runs), so that no render pays for it.
+    fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(&mut self) -> Result<(), RenderError> {
+        let started = Instant::now();
+        let d = self.device;
+        let specs = self.specs();
+        let mut arts = vec![init_paths::artifact(&init_paths::spec(d, None))?, extend::artifact::<S, E, I>(&specs.extend)?];
+        let wide = self.scene.nodes8.is_some();
+        arts.push(if wide { traverse8::artifact(&specs.traverse8)? } else { traverse::artifact(&specs.traverse)? });
+        if I::NEE {
+            arts.push(if wide { trace_shadow8::artifact(&specs.shadow8)? } else { trace_shadow::artifact(&specs.shadow)? });
+        }
+        if self.opts.compact {
+            arts.extend(compact::artifacts(&specs.compact)?);
+        }
+        for a in &arts {
+            d.prepare(a)?;
+        }
+        self.startup.pipelines += started.elapsed();
+        Ok(())
     }
 
     fn advance_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
@@ -546,6 +594,7 @@ impl<'d> Renderer<'d> {
         progress: &mut dyn FnMut(f64, &RenderStats),
     ) -> Result<RenderStats, RenderError> {
         let resumed = Instant::now();
+        let specs = self.specs();
         let d = self.device;
         let p = &self.paths;
         let n = self.frame.slots;
@@ -564,14 +613,6 @@ impl<'d> Renderer<'d> {
             progress(1.0, &run.stats);
             return Ok(run.stats.clone());
         }
-        let specs = Specs {
-            traverse: traverse::spec(d, None),
-            traverse8: traverse8::spec(d, None),
-            extend: extend::spec(d, Some(self.opts.algorithm.group)),
-            shadow: trace_shadow::spec(d, None),
-            shadow8: trace_shadow8::spec(d, None),
-            compact: compact::specs(d),
-        };
         let wall_before = run.stats.wall;
         // Several iterations go into one submission (about 10 ms of GPU work), and two
         // submissions are kept in flight: the host records and submits the next while the
@@ -668,6 +709,33 @@ impl<'d> Renderer<'d> {
             pixels,
             paths,
         })
+    }
+}
+
+/// An operation over the kernels of the current options (see `Renderer::with_kernels`).
+trait KernelOp {
+    type Out;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out;
+}
+
+struct Advance<'a> {
+    until: Budget,
+    progress: &'a mut dyn FnMut(f64, &RenderStats),
+}
+
+impl KernelOp for Advance<'_> {
+    type Out = Result<RenderStats, RenderError>;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
+        r.advance_kernels::<S, E, I>(self.until, self.progress)
+    }
+}
+
+struct Prepare;
+
+impl KernelOp for Prepare {
+    type Out = Result<(), RenderError>;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
+        r.prepare_kernels::<S, E, I>()
     }
 }
 

@@ -248,6 +248,15 @@ impl Device {
         }
     }
 
+    /// Compiles the pipeline of `kernel` now (or finds it cached), so that the first
+    /// dispatch does not pay for it: a renderer prepares its kernels before it is timed.
+    pub fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        match &self.inner {
+            Inner::Wgpu(d) => d.prepare(kernel),
+            Inner::Vulkan(d) => d.prepare(kernel),
+        }
+    }
+
     /// How many pipelines this device has compiled and cached.
     pub fn cached_pipeline_count(&self) -> usize {
         match &self.inner {

@@ -15,6 +15,7 @@
 pub mod artifact;
 mod buffer;
 mod device;
+mod disk_cache;
 mod error;
 mod pipeline_cache;
 mod timing;

@@ -119,6 +119,11 @@ pub(crate) struct VkDevice {
     shared: Arc<Shared>,
     submitter: Mutex<Submitter>,
     queue_family: u32,
+    /// The driver's pipeline cache, loaded from and saved to `cache_file` (`disk_cache`).
+    vk_cache: vk::PipelineCache,
+    cache_file: Option<std::path::PathBuf>,
+    /// Whether a pipeline was created since the cache was loaded (then it is saved on drop).
+    cache_dirty: std::sync::atomic::AtomicBool,
     subgroup_control: SubgroupControl,
     timestamp_valid_bits: u32,
     timestamp_period_ns: f64,
@@ -138,6 +143,12 @@ impl Drop for VkDevice {
             }
             device.destroy_command_pool(s.pool, None);
             device.destroy_fence(s.fence, None);
+            if self.cache_dirty.load(Ordering::Relaxed) {
+                if let Ok(data) = device.get_pipeline_cache_data(self.vk_cache) {
+                    crate::disk_cache::save(&self.cache_file, &data);
+                }
+            }
+            device.destroy_pipeline_cache(self.vk_cache, None);
         }
     }
 }
@@ -148,6 +159,13 @@ impl VkDevice {
         // From here, dropping `shared` on an error path destroys the device and instance.
         let shared = Arc::new(shared);
         let submitter = Submitter::new(&shared.device, desc.queue_family)?;
+        let cache_file = crate::disk_cache::file_for(&desc.info.adapter_name);
+        let initial = crate::disk_cache::load(&cache_file);
+        let create = |data: &[u8]| unsafe {
+            shared.device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default().initial_data(data), None)
+        };
+        // A blob the driver rejects outright is dropped rather than failing the device.
+        let vk_cache = create(&initial).or_else(|_| create(&[])).vk("vkCreatePipelineCache")?;
         Ok(VkDevice {
             id: NEXT_DEVICE_ID.fetch_add(1, Ordering::Relaxed),
             info: desc.info,
@@ -156,6 +174,9 @@ impl VkDevice {
             shared,
             submitter: Mutex::new(submitter),
             queue_family: desc.queue_family,
+            vk_cache,
+            cache_file,
+            cache_dirty: std::sync::atomic::AtomicBool::new(false),
             subgroup_control: desc.subgroup_control,
             timestamp_valid_bits: desc.timestamp_valid_bits,
             timestamp_period_ns: desc.timestamp_period_ns,
@@ -506,7 +527,7 @@ impl VkDevice {
                 .stage(stage)
                 .layout(layout);
             let pipeline = device
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_compute_pipelines(self.vk_cache, &[info], None)
                 .map_err(|(_, e)| fail(format!("vkCreateComputePipelines failed: {e}")))?[0];
             Ok(pipeline)
         })();
@@ -516,11 +537,14 @@ impl VkDevice {
             }
         }
         match result {
-            Ok(pipeline) => Ok(Pipeline {
-                pipeline,
-                layout,
-                set_layout,
-            }),
+            Ok(pipeline) => {
+                self.cache_dirty.store(true, Ordering::Relaxed);
+                Ok(Pipeline {
+                    pipeline,
+                    layout,
+                    set_layout,
+                })
+            }
             Err(e) => {
                 unsafe {
                     if layout != vk::PipelineLayout::null() {
@@ -544,6 +568,11 @@ impl VkDevice {
         mapped[..init.len()].copy_from_slice(init);
         mapped[init.len()..bytes as usize].fill(0);
         Ok(RawBuffer::Vulkan(Arc::new(buffer)))
+    }
+
+    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
+    pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        self.pipelines.get_or_create(kernel, || self.create_pipeline(kernel)).map(|_| ())
     }
 
     /// The buffer behind `raw`, for a read-back recorded in a batch.

@@ -419,6 +419,11 @@ impl WgpuDevice {
         })
     }
 
+    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
+    pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        self.pipelines.get_or_create(kernel, || self.create_pipeline(kernel)).map(|_| ())
+    }
+
     /// The buffer behind `raw`, for a read-back recorded in a batch.
     pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<wgpu::Buffer> {
         self.own(raw)
