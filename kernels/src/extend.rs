@@ -176,7 +176,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             } else {
                 let t = tris[tri as usize];
                 let m = materials[t.material as usize];
-                let ng = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
+                // A hit on a (numerically) degenerate triangle has no normal: shade it as
+                // facing the ray rather than let a NaN normal into the next ray.
+                let cr = (t.v1 - t.v0).cross(t.v2 - t.v0);
+                let ng = if cr.dot(cr) > 1.0e-30 { cr.normalize() } else { -d };
                 let front = ng.dot(d) < 0.0;
                 let two_sided = m.flags & TWO_SIDED != 0;
                 let n = if front { ng } else { -ng };

@@ -32,7 +32,8 @@ pub fn build(scene: &Scene, tris: &mut [Triangle]) -> LightTable {
             let area = 0.5 * (t.v1 - t.v0).cross(t.v2 - t.v0).length();
             let sides = if m.two_sided { 2.0 } else { 1.0 };
             let p = luminance(e) * area * sides;
-            if p > 0.0 && p.is_finite() {
+            // Triangles too small for the kernels' f32 normal (which would be NaN) are left out.
+            if p > 0.0 && p.is_finite() && area > 1e-15 {
                 power.push((k as u32, p, area));
             }
         }
