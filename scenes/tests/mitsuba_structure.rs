@@ -269,7 +269,8 @@ fn refs_resolve_for_every_object_kind() {
 <shape type="rectangle"><bsdf type="conductor"><texture type="uniform" name="specular_reflectance"><float name="value" value="0.7"/></texture></bsdf></shape>
 <emitter type="area" id="light"><rgb name="radiance" value="2"/></emitter>
 <shape type="rectangle" id="lamp"><ref id="light"/></shape>
-<ref id="lamp"/>
+<shape type="rectangle" id="plain"/>
+<ref id="plain"/>
 <sampler type="independent" id="spp"><integer name="sample_count" value="9"/></sampler>"#,
     )
     .replace(r#"<rfilter type="box"/></film>"#, r#"<rfilter type="box"/></film><ref id="spp"/>"#);
@@ -306,10 +307,18 @@ fn refs_resolve_for_every_object_kind() {
             specular_reflectance: Vec3::splat(0.7)
         }
     );
-    // The emitter by reference, and the shape added a second time by the top-level <ref>.
-    assert_eq!(s.objects.len(), 6);
+    // The emitter by reference, and a shape added a second time by the top-level <ref>.
+    assert_eq!(s.objects.len(), 7);
     assert_eq!(bsdf(4).emission, Some(Vec3::splat(2.0)));
-    assert_eq!(bsdf(5).emission, Some(Vec3::splat(2.0)));
+    // Mitsuba gives an emitting shape without a BSDF a black diffuse one.
+    assert_eq!(
+        bsdf(4).bsdf,
+        Bsdf::Diffuse {
+            reflectance: Vec3::ZERO
+        }
+    );
+    assert_eq!((bsdf(5).emission, bsdf(6).emission), (None, None));
+    assert_eq!(s.objects[5].triangles.len(), s.objects[6].triangles.len());
     assert_eq!(s.sample_count, 9);
 
     let dir = tmp_dir("refs");
@@ -318,12 +327,22 @@ fn refs_resolve_for_every_object_kind() {
         ("<bsdf type=\"diffuse\" id=\"b\"/>\n<bsdf type=\"conductor\" id=\"b\"/>", "conductor", ErrorKind::Syntax),
         ("<bsdf type=\"twosided\" id=\"a\"><ref id=\"b\"/></bsdf>\n<bsdf type=\"twosided\" id=\"b\"><ref id=\"a\"/></bsdf>", "id=\"a\"", ErrorKind::Cycle),
         (r#"<shape type="sphere"><bsdf type="diffuse"><ref name="reflectance" id="s"/></bsdf></shape><sensor type="perspective" id="s"/>"#, "reflectance", ErrorKind::Syntax),
+        (r#"<shape type="sphere"><bsdf type="twosided"><bsdf type="dielectric"/></bsdf></shape>"#, "twosided", ErrorKind::Syntax),
+        (r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="0.1 0.2 0.3"/></bsdf></shape>"#, "spectrum", ErrorKind::Syntax),
     ] {
         let xml = scene(body);
         let e = load_err(&write(&dir, "scene.xml", &xml));
         assert_eq!(e.kind, kind, "{e}");
         assert_eq!(e.location.line_number(), Some(line_of(&xml, needle)), "{e}");
     }
+    // One area emitter on two shapes (Mitsuba: "an endpoint can only be attached to a single
+    // shape"), here through a top-level <ref> adding the lamp twice.
+    let xml = scene("<emitter type=\"area\" id=\"light\"/>\n<shape type=\"sphere\" id=\"lamp\"><ref id=\"light\"/></shape>\n<ref id=\"lamp\"/>");
+    let e = load_err(&write(&dir, "shared-emitter.xml", &xml));
+    assert_eq!(
+        (e.kind, e.location.line_number()),
+        (ErrorKind::Unsupported, Some(8))
+    );
     let e = load_err(&write(&dir, "cycle.xml", scene("<bsdf type=\"twosided\" id=\"a\"><ref id=\"b\"/></bsdf>\n<bsdf type=\"twosided\" id=\"b\"><ref id=\"a\"/></bsdf>")));
     assert!(e.message.contains("a -> b -> a"), "{e}");
 }

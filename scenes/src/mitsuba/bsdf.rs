@@ -144,8 +144,8 @@ fn alpha(ctx: &mut Ctx, obj: &Obj) -> Result<f32, SceneError> {
             ))
         }
     };
-    if alpha.is_nan() || alpha <= 0.0 {
-        return Err(syntax(obj.loc_of("alpha"), "alpha must be positive"));
+    if alpha.is_nan() || alpha < 0.0 {
+        return Err(syntax(obj.loc_of("alpha"), "alpha must be >= 0"));
     }
     Ok(alpha)
 }
@@ -178,9 +178,20 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         "roughconductor" => {
             conductor_material(ctx, obj)?;
             let alpha = alpha(ctx, obj)?;
-            Bsdf::RoughConductor {
-                alpha,
-                specular_reflectance: color(ctx, "specular_reflectance", 1.0)?,
+            let specular_reflectance = color(ctx, "specular_reflectance", 1.0)?;
+            if alpha == 0.0 {
+                ctx.diag.warn(
+                    obj.loc_of("alpha"),
+                    "roughconductor with alpha 0 rendered as a smooth conductor",
+                );
+                Bsdf::Conductor {
+                    specular_reflectance,
+                }
+            } else {
+                Bsdf::RoughConductor {
+                    alpha,
+                    specular_reflectance,
+                }
             }
         }
         "dielectric" => dielectric(ctx, obj)?,
@@ -218,6 +229,15 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
             c.take();
             inner.push(parse_bsdf(ctx, t)?);
         }
+    }
+    if inner
+        .iter()
+        .any(|b| matches!(b.bsdf, Bsdf::Dielectric { .. }))
+    {
+        return Err(syntax(
+            &obj.loc,
+            "twosided can only wrap materials without transmission (not a dielectric)",
+        ));
     }
     let front = match inner.as_slice() {
         [] => {

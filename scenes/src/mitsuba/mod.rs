@@ -111,6 +111,8 @@ pub(crate) struct Ctx<'a> {
     pub search: Vec<PathBuf>,
     /// Parsed BSDFs by object address.
     pub bsdfs: HashMap<usize, ParsedBsdf>,
+    /// Area emitters already attached to a shape, by object address.
+    pub attached: Vec<usize>,
 }
 
 impl<'a> Ctx<'a> {
@@ -221,6 +223,7 @@ fn build(mut diag: Diag, doc: &xml::Document) -> Result<(Scene, Vec<Warning>), S
         ids,
         search: doc.search.clone(),
         bsdfs: HashMap::new(),
+        attached: Vec::new(),
     };
     let scene = interpret(&mut ctx, &scene_obj)?;
     Ok((scene, ctx.diag.warnings))

@@ -363,11 +363,17 @@ fn rgb(loc: &Location, text: &str) -> Result<Vec3, SceneError> {
     }
 }
 
-/// A constant `<spectrum value="0.5"/>` is grey; a sampled one ("400:0.1, 500:0.2, ...") is
+/// A constant `<spectrum value="0.5"/>` is grey (three numbers are not a spectrum); a sampled one ("400:0.1, 500:0.2, ...") is
 /// approximated by its mean, with a warning, since the renderer is RGB.
 fn spectrum(diag: &mut Diag, loc: &Location, text: &str) -> Result<Vec3, SceneError> {
     if !text.contains(':') {
-        return rgb(loc, text);
+        return match numbers(loc, text)?.as_slice() {
+            [v] => Ok(Vec3::splat(*v as f32)),
+            _ => Err(syntax(
+                loc,
+                format!("spectrum value '{text}' is neither one number nor wavelength:value pairs"),
+            )),
+        };
     }
     let mut values = Vec::new();
     for pair in text.split(',').filter(|s| !s.trim().is_empty()) {

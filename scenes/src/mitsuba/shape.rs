@@ -121,6 +121,15 @@ pub(crate) fn add_shape<'a>(
             }
             ("emitter", "area") => {
                 c.take();
+                let key = t as *const Obj as usize;
+                if ctx.attached.contains(&key) {
+                    ctx.diag.unsupported(
+                        &c.loc,
+                        "this area emitter is already attached to another shape (Mitsuba allows one)",
+                        "each shape emits",
+                    )?;
+                }
+                ctx.attached.push(key);
                 let radiance = ctx.color(t, "radiance")?.unwrap_or(Vec3::ONE);
                 if !radiance.is_finite() || radiance.min_element() < 0.0 {
                     return Err(syntax(
@@ -166,7 +175,17 @@ pub(crate) fn add_shape<'a>(
     }
     obj.finish(&mut ctx.diag)?;
 
-    let ParsedBsdf { bsdf, two_sided } = bsdf.unwrap_or(DEFAULT_BSDF);
+    // Mitsuba's default BSDF is diffuse 0.5, but black on a shape that emits.
+    let ParsedBsdf { bsdf, two_sided } = match (bsdf, emission) {
+        (Some(b), _) => b,
+        (None, Some(_)) => ParsedBsdf {
+            bsdf: crate::material::Bsdf::Diffuse {
+                reflectance: Vec3::ZERO,
+            },
+            two_sided: false,
+        },
+        (None, None) => DEFAULT_BSDF,
+    };
     let material = builder.material(Material {
         bsdf,
         two_sided,
