@@ -310,6 +310,10 @@ fn refs_resolve_for_every_object_kind() {
     // The emitter by reference, and a shape added a second time by the top-level <ref>.
     assert_eq!(s.objects.len(), 7);
     assert_eq!(bsdf(4).emission, Some(Vec3::splat(2.0)));
+    assert!(!l
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("must be nested")));
     // Mitsuba gives an emitting shape without a BSDF a black diffuse one.
     assert_eq!(
         bsdf(4).bsdf,

@@ -324,6 +324,8 @@ fn emitter<'a>(
             }
             Ok(())
         }
+        // With an id it is attached where a shape refers to it; Mitsuba drops a bare one.
+        "area" if obj.id.is_some() => Ok(()),
         "area" => {
             ctx.diag.warn(
                 &obj.loc,
