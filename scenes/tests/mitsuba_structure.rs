@@ -761,3 +761,35 @@ fn lookat_without_up_matches_mitsuba() {
     .transpose();
     assert!(m.abs_diff_eq(expected, 1e-5), "{m}");
 }
+
+/// Absurd nesting or reference chains are errors, not a stack overflow.
+#[test]
+fn deep_nesting_and_long_reference_chains_are_refused() {
+    let n = 100_000;
+    let deep = format!(
+        "<scene version=\"3.0.0\">{}{}</scene>",
+        "<bsdf type=\"twosided\">".repeat(n),
+        "</bsdf>".repeat(n)
+    );
+    let e = load_mitsuba_str(&deep, ".").unwrap_err();
+    assert!(e.message.contains("nested deeper"), "{e}");
+    let chain: String = (0..5000)
+        .map(|i| {
+            format!(
+                "<bsdf type=\"twosided\" id=\"b{i}\"><ref id=\"b{}\"/></bsdf>\n",
+                i + 1
+            )
+        })
+        .collect();
+    let xml = scene(&format!(
+        "{chain}<bsdf type=\"diffuse\" id=\"b5000\"/>\n<shape type=\"sphere\"><ref id=\"b0\"/></shape>"
+    ));
+    let e = load_mitsuba_str(&xml, ".").unwrap_err();
+    assert!(e.message.contains("nested deeper"), "{e}");
+    // Ordinary depths are fine.
+    let xml = scene(&format!(
+        "{}<bsdf type=\"diffuse\"/>{}",
+        "<shape type=\"sphere\"><bsdf type=\"twosided\">", "</bsdf></shape>"
+    ));
+    load_mitsuba_str(&xml, ".").unwrap();
+}

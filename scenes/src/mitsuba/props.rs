@@ -634,6 +634,15 @@ pub(crate) fn check_refs(scene: &Obj, ids: &Ids) -> Result<(), SceneError> {
                 format!("circular reference: {}", cycle.join(" -> ")),
             ));
         }
+        if path.len() >= super::xml::MAX_NESTING {
+            return Err(syntax(
+                &o.loc,
+                format!(
+                    "objects and references nested deeper than {} levels",
+                    super::xml::MAX_NESTING
+                ),
+            ));
+        }
         path.push(o);
         for c in &o.children {
             let target = match &c.kind {

@@ -92,6 +92,10 @@ struct Param {
 /// Deeper nesting than this is refused even without a cycle (Mitsuba has a limit too).
 const MAX_INCLUDE_DEPTH: usize = 64;
 
+/// Elements nested deeper than this (across includes) are refused: no scene needs it, and the
+/// readers recurse.
+pub(crate) const MAX_NESTING: usize = 100;
+
 /// Checks an element's attributes: a missing required one (`"!name"`) is an error, an unexpected
 /// one is rejected as Mitsuba does (a warning under `lenient`).
 pub(crate) fn check_attrs(
@@ -136,6 +140,7 @@ pub(crate) fn read(
             .collect(),
         chain: Vec::new(),
         included_from: Vec::new(),
+        depth: 0,
     };
     sort_params(&mut r.params);
     let cwd: Vec<PathBuf> = std::env::current_dir().into_iter().collect();
@@ -188,6 +193,8 @@ struct Reader<'d> {
     /// The files being read, outermost first: (canonical path, path as written).
     chain: Vec<(PathBuf, PathBuf)>,
     included_from: Vec<(PathBuf, Location)>,
+    /// Nesting of the element being read.
+    depth: usize,
 }
 
 struct FileState<'d, 'i> {
@@ -209,6 +216,8 @@ impl Reader<'_> {
         parent_search: Vec<PathBuf>,
         is_main: bool,
     ) -> Result<(Elem, Vec<PathBuf>), SceneError> {
+        // roxmltree recurses per nesting level: refuse absurd nesting before it overflows.
+        check_nesting(text, file)?;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             err(
                 &Location::line(file, e.pos().row),
@@ -264,6 +273,25 @@ impl Reader<'_> {
     /// One element and, recursively, its children; `<default>`, `<path>` and `<include>` children
     /// are consumed here.
     fn element(
+        &mut self,
+        f: &mut FileState,
+        node: Node,
+        loc: Location,
+        is_root: bool,
+    ) -> Result<Elem, SceneError> {
+        if self.depth >= MAX_NESTING {
+            return Err(syntax(
+                &loc,
+                format!("elements nested deeper than {MAX_NESTING} levels"),
+            ));
+        }
+        self.depth += 1;
+        let e = self.element_inner(f, node, loc, is_root);
+        self.depth -= 1;
+        e
+    }
+
+    fn element_inner(
         &mut self,
         f: &mut FileState,
         node: Node,
@@ -496,6 +524,69 @@ impl Reader<'_> {
     }
 }
 
+/// Refuses text whose elements nest deeper than [`MAX_NESTING`], by a scan of its tags (start
+/// tags, end tags, empty-element tags; comments, CDATA, processing instructions and declarations
+/// skipped; quoted attribute values may hold '>').
+fn check_nesting(text: &str, file: &Path) -> Result<(), SceneError> {
+    let b = text.as_bytes();
+    let (mut i, mut depth, mut line) = (0, 0usize, 1u32);
+    let skip_to = |from: usize, end: &str| {
+        text[from..]
+            .find(end)
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    while i < b.len() {
+        match b[i] {
+            b'\n' => {
+                line += 1;
+                i += 1;
+            }
+            b'<' => {
+                let rest = &text[i..];
+                let next = if rest.starts_with("<!--") {
+                    skip_to(i, "-->")
+                } else if rest.starts_with("<![CDATA[") {
+                    skip_to(i, "]]>")
+                } else if rest.starts_with("<?") {
+                    skip_to(i, "?>")
+                } else if rest.starts_with("<!") {
+                    skip_to(i, ">")
+                } else if rest.starts_with("</") {
+                    depth = depth.saturating_sub(1);
+                    skip_to(i, ">")
+                } else {
+                    // A start tag: find its '>' outside quotes.
+                    let mut j = i + 1;
+                    let mut quote = None;
+                    while j < b.len() {
+                        match (quote, b[j]) {
+                            (None, b'"' | b'\'') => quote = Some(b[j]),
+                            (Some(q), c) if c == q => quote = None,
+                            (None, b'>') => break,
+                            _ => {}
+                        }
+                        j += 1;
+                    }
+                    if j < b.len() && b[j - 1] != b'/' {
+                        depth += 1;
+                        if depth > MAX_NESTING {
+                            return Err(syntax(
+                                &Location::line(file, line),
+                                format!("elements nested deeper than {MAX_NESTING} levels"),
+                            ));
+                        }
+                    }
+                    j + 1
+                };
+                line += text[i..next.min(b.len())].matches('\n').count() as u32;
+                i = next;
+            }
+            _ => i += 1,
+        }
+    }
+    Ok(())
+}
+
 fn sort_params(params: &mut [Param]) {
     params.sort_by_key(|p| std::cmp::Reverse(p.key.len()));
 }
@@ -585,6 +676,19 @@ mod tests {
             assert!(parse_version(bad).is_none(), "{bad}");
         }
         assert!(parse_version("0.6.0").unwrap() < (2, 0, 0));
+    }
+
+    #[test]
+    fn nesting_scan() {
+        let f = Path::new("x.xml");
+        let nest = |n: usize| format!("{}{}", "<a x='>'>".repeat(n), "</a>".repeat(n));
+        assert!(check_nesting(&nest(MAX_NESTING), f).is_ok());
+        assert!(check_nesting(&nest(MAX_NESTING + 1), f).is_err());
+        assert!(check_nesting(&nest(100_000), f).is_err());
+        let flat = "<s>\n<!-- <a><a> -->\n<b/><![CDATA[<c>]]><?pi <d>?>\n</s>".repeat(500);
+        assert!(check_nesting(&flat, f).is_ok());
+        let e = check_nesting(&format!("<s>\n\n{}", nest(200)), f).unwrap_err();
+        assert_eq!(e.location.line_number(), Some(3));
     }
 
     #[test]
