@@ -75,7 +75,8 @@ struct RenderArgs {
     /// Image height (default: the scene's film).
     #[arg(long, allow_negative_numbers = true)]
     height: Option<u32>,
-    /// Completed paths per pixel.
+    /// Completed paths per pixel (default: the sample_count of a Mitsuba scene's sampler, or
+    /// 64).
     #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
     paths: Option<u32>,
     /// Budget of accumulated GPU kernel time (traverse + extend + compact), in seconds.
@@ -200,10 +201,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
         (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
             return Err(format!("--time {t} must be a positive number of seconds"))
         }
-        (_, Some(t)) => Budget::KernelTime(Duration::from_secs_f64(t)),
+        (_, Some(t)) => Some(Budget::KernelTime(Duration::from_secs_f64(t))),
         (Some(0), _) => return Err("--paths must be at least 1".into()),
-        (Some(p), None) => Budget::PathsPerPixel(p),
-        (None, None) => Budget::PathsPerPixel(64),
+        (Some(p), None) => Some(Budget::PathsPerPixel(p)),
+        (None, None) => None,
     };
     let scene = load_scene(
         &a.scene,
@@ -212,6 +213,14 @@ fn render(a: RenderArgs) -> Result<(), String> {
             lenient: a.lenient,
         },
     )?;
+    // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
+    let budget = budget.unwrap_or(Budget::PathsPerPixel(
+        if embedded::names().contains(&a.scene.as_str()) {
+            64
+        } else {
+            scene.sample_count.max(1)
+        },
+    ));
     let size = match (a.width, a.height) {
         (None, None) => None,
         (w, h) => Some((

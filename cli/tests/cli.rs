@@ -418,3 +418,37 @@ fn scene_structure_end_to_end() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("nosuch=1"), "{err}");
 }
+/// Without --paths, a Mitsuba scene renders its sampler's sample_count (embedded scenes: 64).
+#[test]
+fn xml_scene_renders_its_sample_count() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    let scene = write(
+        &dir,
+        "spp.xml",
+        r#"<scene version="3.0.0"><integrator type="path"/>
+<sensor type="perspective"><sampler type="independent"><integer name="sample_count" value="3"/></sampler><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+<emitter type="constant"/></scene>"#,
+    );
+    let out = cohort()
+        .args(["render", "--backend", "vulkan", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("s.exr"))
+        .arg("--png")
+        .arg(dir.join("s.png"))
+        .arg("--stats")
+        .arg(dir.join("s.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["paths_per_pixel"], 3.0);
+}

@@ -793,3 +793,26 @@ fn deep_nesting_and_long_reference_chains_are_refused() {
     ));
     load_mitsuba_str(&xml, ".").unwrap();
 }
+
+/// Sensor and film parameters the renderer cannot honour are warnings, not silence.
+#[test]
+fn ignored_camera_and_film_parameters_warn() {
+    let xml = r#"<scene version="3.0.0"><integrator type="path"/><sensor type="perspective"><float name="near_clip" value="1"/><float name="principal_point_offset_x" value="0.1"/><film type="hdrfilm"><string name="pixel_format" value="luminance"/><integer name="crop_width" value="4"/><rfilter type="gaussian"/></film><sampler type="stratified"/></sensor></scene>"#;
+    let l = load_mitsuba_str(xml, ".").unwrap();
+    for needle in [
+        "near_clip",
+        "principal_point_offset_x",
+        "luminance",
+        "crop",
+        "gaussian",
+        "stratified",
+    ] {
+        assert!(
+            l.warnings.iter().any(|w| w.message.contains(needle)),
+            "{needle}: {:?}",
+            l.warnings
+        );
+    }
+    let bad = xml.replace(r#"value="1"/>"#, r#"value="0"/>"#);
+    assert!(load_mitsuba_str(&bad, ".").is_err());
+}

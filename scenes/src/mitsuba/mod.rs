@@ -446,7 +446,22 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
     }
     let near_clip = obj.float("near_clip")?.unwrap_or(1e-2);
     let far_clip = obj.float("far_clip")?.unwrap_or(1e4);
-    let _ = ctx;
+    if !(near_clip > 0.0 && near_clip < far_clip) {
+        return Err(syntax(
+            obj.loc_of("near_clip"),
+            "near_clip must be positive and less than far_clip",
+        ));
+    }
+    if near_clip != 1e-2 || far_clip != 1e4 {
+        ctx.diag.warn(
+            obj.loc_of(if near_clip != 1e-2 {
+                "near_clip"
+            } else {
+                "far_clip"
+            }),
+            "near_clip/far_clip are not supported by the renderer: nothing is clipped",
+        );
+    }
     Ok(Camera {
         to_world,
         fov,
@@ -499,6 +514,14 @@ fn read_film_and_sampler<'a>(
                         &c.loc,
                         "film crop window is not supported: the whole film is rendered",
                     );
+                }
+                if let Some(f) = c.string("pixel_format")? {
+                    if !matches!(f.to_ascii_lowercase().as_str(), "rgb" | "rgba") {
+                        ctx.diag.warn(
+                            c.loc_of("pixel_format"),
+                            format!("pixel_format '{f}' is not supported: the image is RGB"),
+                        );
+                    }
                 }
                 // Output encoding and options without effect on a linear RGB film.
                 for name in [
