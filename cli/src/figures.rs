@@ -41,22 +41,22 @@ pub struct FiguresArgs {
     #[arg(long, default_value = DEFAULT_NS)]
     n: String,
     /// Budget of every point: accumulated GPU kernel time (traverse + extend + compact), seconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     time: f64,
     /// Kernel-time budget of the `normal` reference images, seconds (default: 20 x --time).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     reference_time: Option<f64>,
     /// Image width (default: the scene's film).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     width: Option<u32>,
     /// Image height (default: the scene's film).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     height: Option<u32>,
     /// `wgpu` (WGSL) or `vulkan` (SPIR-V through ash); default: the best found.
     #[arg(long)]
     backend: Option<String>,
     /// Seed of every point (the reference uses a different seed derived from it).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     seed: u32,
     /// Where figures.csv, the plots and the cached references go (created if missing).
     #[arg(long, default_value = "figures")]
@@ -71,11 +71,11 @@ pub struct FiguresArgs {
     #[arg(long, default_value = "path,rr,rr-no")]
     columns: String,
     /// Continuation probability of the whole-group-end roulette (columns `whole`, `whole-no`).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     end_continue: f32,
     /// Advanced: the points of a group (`normal` and every configuration at one N) take
     /// turns on the GPU in this many slices of --time / SLICES each.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, allow_negative_numbers = true)]
     slices: u32,
 }
 
@@ -213,7 +213,7 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
     let mut done = 0u64;
     let mut written = Vec::new();
     for spec in &plan.scenes {
-        let scene = crate::load_scene(&spec.arg)?;
+        let scene = crate::load_scene(&spec.arg, &Default::default())?;
         // The BVH is built and uploaded once per scene, not once per point.
         let gpu = cohort_render::GpuScene::prepare(&device, &scene).map_err(|e| format!("{}: {e}", spec.label))?;
         let scene: Prepared = (scene, gpu);

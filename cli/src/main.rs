@@ -47,7 +47,7 @@ struct RenderArgs {
     #[arg(long, default_value = "normal")]
     algorithm: String,
     /// N: the hemisphere is split into N x 4N patches for coherent sampling (1..=1000).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
     n: u32,
     /// How a ray samples inside its group's patch: `uniform` (the paper), `cosine`
     /// (cosine-weighted inside the patch) or `equal-area` (equal-area patches through the
@@ -61,27 +61,28 @@ struct RenderArgs {
     #[arg(long, default_value = "path")]
     rr: String,
     /// Continuation probability of the whole-group-end roulette (`--rr whole`), in (0, 1].
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     end_continue: f32,
     /// Interleaved sampling factor D (odd): pixel coordinates are multiplied by D.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     interleave: u32,
     /// Glossy (GGX) bounces also sample coherently, sharing a cell of the VNDF domain.
     #[arg(long)]
     coherent_glossy: bool,
     /// Image width (default: the scene's film).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     width: Option<u32>,
     /// Image height (default: the scene's film).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     height: Option<u32>,
-    /// Completed paths per pixel.
-    #[arg(long, conflicts_with = "time")]
+    /// Completed paths per pixel (default: the sample_count of a Mitsuba scene's sampler, or
+    /// 64).
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
     paths: Option<u32>,
     /// Budget of accumulated GPU kernel time (traverse + extend + compact), in seconds.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     time: Option<f64>,
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     seed: u32,
     /// Linear EXR output.
     #[arg(long, default_value = "render.exr")]
@@ -90,7 +91,7 @@ struct RenderArgs {
     #[arg(long, default_value = "render.png")]
     png: PathBuf,
     /// Exposure of the PNG, in stops.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
     /// Statistics as JSON.
     #[arg(long)]
@@ -108,8 +109,25 @@ struct RenderArgs {
     #[arg(long)]
     coherent_light: bool,
     /// K of the K x K light strata of `--coherent-light` (1..=64).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, allow_negative_numbers = true)]
     light_cells: u32,
+    /// Mitsuba scenes: render even with plugins, elements or parameters that Mitsuba rejects or
+    /// the renderer does not implement; each becomes a warning and the object is skipped or
+    /// replaced by the nearest supported one (default: an error naming file and line).
+    #[arg(long)]
+    lenient: bool,
+    /// Mitsuba scenes: set the scene parameter `$NAME` (overrides its `<default>`), as
+    /// `mitsuba -D NAME=VALUE`. Repeatable.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    define: Vec<(String, String)>,
+}
+
+/// `NAME=VALUE` of `-D`.
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+        _ => Err(format!("expected NAME=VALUE, got '{s}'")),
+    }
 }
 
 fn main() -> ExitCode {
@@ -133,12 +151,20 @@ fn main() -> ExitCode {
     }
 }
 
-fn load_scene(name: &str) -> Result<cohort_scenes::Scene, String> {
+fn load_scene(
+    name: &str,
+    options: &cohort_scenes::LoadOptions,
+) -> Result<cohort_scenes::Scene, String> {
     if let Some(s) = embedded::load(name) {
+        if !options.params.is_empty() {
+            return Err(format!(
+                "-D sets parameters of Mitsuba XML scenes; `{name}` is an embedded scene"
+            ));
+        }
         return Ok(s);
     }
     if name.ends_with(".xml") || std::path::Path::new(name).exists() {
-        let loaded = cohort_scenes::load_mitsuba(name).map_err(|e| e.to_string())?;
+        let loaded = cohort_scenes::load_mitsuba_with(name, options).map_err(|e| e.to_string())?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
@@ -176,13 +202,27 @@ fn render(a: RenderArgs) -> Result<(), String> {
         (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
             return Err(format!("--time {t} must be a positive number of seconds"))
         }
-        (_, Some(t)) => Budget::KernelTime(Duration::from_secs_f64(t)),
+        (_, Some(t)) => Some(Budget::KernelTime(Duration::from_secs_f64(t))),
         (Some(0), _) => return Err("--paths must be at least 1".into()),
-        (Some(p), None) => Budget::PathsPerPixel(p),
-        (None, None) => Budget::PathsPerPixel(64),
+        (Some(p), None) => Some(Budget::PathsPerPixel(p)),
+        (None, None) => None,
     };
-    let scene = load_scene(&a.scene)?;
+    let scene = load_scene(
+        &a.scene,
+        &cohort_scenes::LoadOptions {
+            params: a.define.clone(),
+            lenient: a.lenient,
+        },
+    )?;
     let scene_loaded = process_start.elapsed();
+    // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
+    let budget = budget.unwrap_or(Budget::PathsPerPixel(
+        if embedded::names().contains(&a.scene.as_str()) {
+            64
+        } else {
+            scene.sample_count.max(1)
+        },
+    ));
     let size = match (a.width, a.height) {
         (None, None) => None,
         (w, h) => Some((
@@ -333,6 +373,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "wall_s": stats.wall.as_secs_f64(),
             "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": scene_loaded.as_secs_f64(), "device": (device_opened - scene_loaded).as_secs_f64(),
                 "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64() },
+            "scene_integrator": {
+                "max_depth": scene.integrator.max_depth, "rr_depth": scene.integrator.rr_depth,
+                "hide_emitters": scene.integrator.hide_emitters,
+            },
         });
         output::write_text(path, &serde_json::to_string_pretty(&json).unwrap())
             .map_err(|e| e.to_string())?;

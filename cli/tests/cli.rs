@@ -101,3 +101,354 @@ fn tempdir() -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+/// A sensor and an integrator for the small scenes below (8 x 8 pixels).
+const SETUP: &str = r#"<integrator type="path"/>
+<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>"#;
+
+fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn scene_file(dir: &std::path::Path, name: &str, body: &str) -> std::path::PathBuf {
+    write(
+        dir,
+        name,
+        &format!("<scene version=\"3.0.0\">\n{SETUP}\n{body}\n</scene>\n"),
+    )
+}
+
+/// `cohort render --scene <scene>` with small outputs in `dir`; returns (exit code, stdout, stderr).
+fn render_scene(
+    dir: &std::path::Path,
+    scene: &std::path::Path,
+    extra: &[&str],
+) -> (i32, String, String) {
+    let out = cohort()
+        .args(["render", "--paths", "2", "--backend", "vulkan", "--scene"])
+        .arg(scene)
+        .arg("--out")
+        .arg(dir.join("r.exr"))
+        .arg("--png")
+        .arg(dir.join("r.png"))
+        .arg("--stats")
+        .arg(dir.join("r.json"))
+        .args(extra)
+        .output()
+        .unwrap();
+    let code = out.status.code().unwrap_or(-1);
+    (
+        code,
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Broken scenes of every kind end with exit 1 and an error naming the problem, never a panic
+/// (exit 101). These fail while loading, before any GPU work.
+#[test]
+fn broken_scenes_fail_cleanly() {
+    let dir = tempdir();
+    write(
+        &dir,
+        "cycle-a.xml",
+        "<scene version=\"3.0.0\">\n<include filename=\"cycle-b.xml\"/>\n</scene>",
+    );
+    write(
+        &dir,
+        "cycle-b.xml",
+        "<scene version=\"3.0.0\">\n<include filename=\"cycle-a.xml\"/>\n</scene>",
+    );
+    let cases = [
+        (
+            scene_file(
+                &dir,
+                "mesh.xml",
+                r#"<shape type="obj"><string name="filename" value="gone.obj"/></shape>"#,
+            ),
+            vec!["mesh.xml:4", "gone.obj", "not found"],
+        ),
+        (
+            dir.join("cycle-a.xml"),
+            vec!["include cycle", "cycle-a.xml -> ", "cycle-b.xml -> "],
+        ),
+        (
+            scene_file(
+                &dir,
+                "include.xml",
+                r#"<include filename="parts/gone.xml"/>"#,
+            ),
+            vec!["include.xml:4", "parts/gone.xml", "not found"],
+        ),
+        (
+            scene_file(
+                &dir,
+                "unknown.xml",
+                r#"<shape type="sphere"><bsdf type="nosuch"/></shape>"#,
+            ),
+            vec![
+                "unknown.xml:4",
+                "unknown bsdf plugin 'nosuch'",
+                "use --lenient to render without it",
+            ],
+        ),
+        (
+            scene_file(&dir, "point.xml", r#"<emitter type="point"/>"#),
+            vec![
+                "point.xml:4",
+                "emitter 'point'",
+                "use --lenient to render without it",
+            ],
+        ),
+        (
+            scene_file(
+                &dir,
+                "ref.xml",
+                r#"<shape type="sphere"><ref id="nothing"/></shape>"#,
+            ),
+            vec!["ref.xml:4", "nothing"],
+        ),
+        (
+            scene_file(
+                &dir,
+                "param.xml",
+                r#"<shape type="sphere"><float name="radius" value="$r"/></shape>"#,
+            ),
+            vec!["param.xml:4", "$r"],
+        ),
+        (
+            write(
+                &dir,
+                "xml.xml",
+                "<scene version=\"3.0.0\">\n<shape>\n</scene>",
+            ),
+            vec!["xml.xml:3", "malformed XML"],
+        ),
+        (
+            write(&dir, "noversion.xml", "<scene>\n</scene>"),
+            vec!["noversion.xml:1", "version"],
+        ),
+        (write(&dir, "empty-file.xml", ""), vec!["empty-file.xml"]),
+    ];
+    for (scene, expected) in cases {
+        let (code, _, err) = render_scene(&dir, &scene, &[]);
+        assert_eq!(code, 1, "{}: exit {code}\n{err}", scene.display());
+        assert!(err.contains("error:") && !err.contains("panicked"), "{err}");
+        for e in expected {
+            assert!(err.contains(e), "{}: no '{e}' in:\n{err}", scene.display());
+        }
+    }
+}
+
+/// A negative number for a numeric option is a value error naming the option (clap's value
+/// parser), not "unexpected argument"; options that may be negative accept it.
+#[test]
+fn negative_numbers_are_value_errors() {
+    for (flag, value) in [
+        ("--paths", "-1"),
+        ("--width", "-1"),
+        ("--height", "-5"),
+        ("--seed", "-3"),
+        ("--n", "-2"),
+        ("--interleave", "-1"),
+        ("--light-cells", "-4"),
+    ] {
+        let out = cohort().args(["render", flag, value]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}: {err}");
+        let upper = flag
+            .trim_start_matches("--")
+            .replace('-', "_")
+            .to_uppercase();
+        assert!(
+            err.contains(&format!("invalid value '{value}' for '{flag} <{upper}>'")),
+            "{err}"
+        );
+        assert!(!err.contains("unexpected argument"), "{err}");
+    }
+    for args in [
+        vec!["render", "--time", "-1"],
+        vec![
+            "render",
+            "--end-continue",
+            "-0.5",
+            "--rr",
+            "whole",
+            "--algorithm",
+            "warp",
+        ],
+        vec!["figures", "--time", "-1"],
+    ] {
+        let out = cohort().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("error:") && !err.contains("unexpected argument"),
+            "{args:?}: {err}"
+        );
+    }
+    // --exposure -1 is a valid value: the run gets as far as the next error.
+    let out = cohort()
+        .args(["render", "--exposure", "-1", "--paths", "0"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--paths must be at least 1"), "{err}");
+    let out = cohort().args(["render", "-D", "novalue"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("expected NAME=VALUE"));
+}
+
+/// An empty scene renders black and a scene with only a constant emitter renders its radiance
+/// (once a bytemuck panic, exit 101).
+#[test]
+fn empty_and_emitter_only_scenes_render() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    for (name, body, mean) in [
+        ("empty.xml", "", "0.0000 0.0000 0.0000"),
+        (
+            "env.xml",
+            r#"<emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>"#,
+            "0.5000 0.5000 0.5000",
+        ),
+        (
+            "no-area-light.xml",
+            r#"<shape type="sphere"/>"#,
+            "0.0000 0.0000 0.0000",
+        ),
+    ] {
+        let scene = scene_file(&dir, name, body);
+        for integrator in ["nee", "path"] {
+            let (code, out, err) = render_scene(&dir, &scene, &["--integrator", integrator]);
+            assert_eq!(code, 0, "{name} {integrator}: {err}");
+            assert!(
+                out.contains(&format!("mean radiance  {mean}")),
+                "{name} {integrator}: {out}"
+            );
+        }
+    }
+}
+
+/// Strict refuses what the renderer does not implement; --lenient renders without it, warning.
+#[test]
+fn lenient_renders_what_strict_refuses() {
+    let dir = tempdir();
+    let scene = scene_file(
+        &dir,
+        "lenient.xml",
+        "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n<shape type=\"rectangle\"><bsdf type=\"plastic\"><rgb name=\"diffuse_reflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
+    );
+    let (code, _, err) = render_scene(&dir, &scene, &[]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("lenient.xml:4") && err.contains("use --lenient to render without it"),
+        "{err}"
+    );
+    if !has_gpu() {
+        return;
+    }
+    let (code, _, err) = render_scene(&dir, &scene, &["--lenient"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("lenient.xml:4: warning: emitter 'point' is not supported"),
+        "{err}"
+    );
+    assert!(
+        err.contains("lenient.xml:5: warning: bsdf 'plastic' is not supported")
+            && err.contains("replaced by diffuse [0.2, 0.4, 0.6]"),
+        "{err}"
+    );
+}
+
+/// The scene-file structure end to end: an <include>d part, a <path> search folder, a <ref> in
+/// a BSDF (twosided around a ref'd BSDF, a ref'd texture), a nested integrator's max_depth and
+/// -D overriding a <default>.
+#[test]
+fn scene_structure_end_to_end() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    write(
+        &dir,
+        "assets/quad.obj",
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n",
+    );
+    write(
+        &dir,
+        "parts/light.xml",
+        r#"<scene version="3.0.0"><shape type="rectangle"><transform name="to_world"><translate z="2"/></transform><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape></scene>"#,
+    );
+    let scene = write(
+        &dir,
+        "structure.xml",
+        r#"<scene version="3.0.0">
+<default name="res" value="16"/>
+<path value="assets"/>
+<integrator type="moment"><integrator type="path"><integer name="max_depth" value="3"/></integrator></integrator>
+<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="$res"/><integer name="height" value="$res"/><rfilter type="box"/></film></sensor>
+<include filename="parts/light.xml"/>
+<texture type="srgb" id="grey"><rgb name="color" value="0.5"/></texture>
+<bsdf type="diffuse" id="paint"><ref name="reflectance" id="grey"/></bsdf>
+<shape type="obj"><string name="filename" value="quad.obj"/><bsdf type="twosided"><ref id="paint"/></bsdf></shape>
+</scene>
+"#,
+    );
+    let (code, _, err) = render_scene(&dir, &scene, &["-D", "res=8"]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(
+        (json["width"].as_u64(), json["height"].as_u64()),
+        (Some(8), Some(8))
+    );
+    assert_eq!(json["triangles"], 4);
+    assert_eq!(json["scene_integrator"]["max_depth"], 3);
+    // Without -D the <default> applies; an unused -D is refused as in Mitsuba.
+    let (code, _, err) = render_scene(&dir, &scene, &[]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(json["width"], 16);
+    let (code, _, err) = render_scene(&dir, &scene, &["-D", "nosuch=1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("nosuch=1"), "{err}");
+}
+/// Without --paths, a Mitsuba scene renders its sampler's sample_count (embedded scenes: 64).
+#[test]
+fn xml_scene_renders_its_sample_count() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempdir();
+    let scene = write(
+        &dir,
+        "spp.xml",
+        r#"<scene version="3.0.0"><integrator type="path"/>
+<sensor type="perspective"><sampler type="independent"><integer name="sample_count" value="3"/></sampler><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+<emitter type="constant"/></scene>"#,
+    );
+    let out = cohort()
+        .args(["render", "--backend", "vulkan", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("s.exr"))
+        .arg("--png")
+        .arg(dir.join("s.png"))
+        .arg("--stats")
+        .arg(dir.join("s.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["paths_per_pixel"], 3.0);
+}

@@ -56,27 +56,49 @@ impl GpuScene {
         bvh: &GpuBvh,
         wide: Option<&GpuBvh8>,
     ) -> Result<GpuScene, RuntimeError> {
-        let nodes: &[BvhNode] = bytemuck::cast_slice(&bvh.nodes);
         let started = std::time::Instant::now();
-        let mut tris: Vec<Triangle> = bytemuck::cast_slice(&bvh.triangles).to_vec();
+        let nodes: &[BvhNode] = cast(&bvh.nodes);
+        let mut tris: Vec<Triangle> = cast(&bvh.triangles).to_vec();
         let lights = crate::lights::build(scene, &mut tris);
         let mats = scene.gpu_materials();
-        let mats: &[Material] = bytemuck::cast_slice(&mats);
+        let mats: &[Material] = cast(&mats);
         Ok(GpuScene {
-            nodes: device.upload(nodes)?,
-            triangles: device.upload(&tris)?,
-            materials: device.upload(mats)?,
+            nodes: upload(device, nodes)?,
+            triangles: upload(device, &tris)?,
+            materials: upload(device, mats)?,
             triangle_count: tris.len(),
-            lights: device.upload(&lights.entries)?,
+            lights: upload(device, &lights.entries)?,
             light_count: lights.count,
             env_light: lights.env_light,
             bvh_build: std::time::Duration::ZERO,
             upload: started.elapsed(),
             nodes8: match wide {
-                Some(w) => Some(device.upload::<WideNode>(bytemuck::cast_slice(&w.nodes))?),
+                Some(w) => Some(upload::<WideNode>(device, cast(&w.nodes))?),
                 None => None,
             },
         })
+    }
+}
+
+/// `bytemuck::cast_slice` that also takes an empty slice: an empty `Vec`'s dangling pointer is
+/// aligned only for its own element type, and `cast_slice` panics when the target type is more
+/// aligned (an empty scene has no nodes, triangles or materials).
+fn cast<A: bytemuck::Pod, B: bytemuck::Pod>(a: &[A]) -> &[B] {
+    if a.is_empty() {
+        &[]
+    } else {
+        bytemuck::cast_slice(a)
+    }
+}
+
+/// `Device::upload`, with one zeroed element in place of an empty array: a kernel's binding must
+/// hold at least one element (wgpu checks it), and the kernels never read these arrays of an
+/// empty scene (`has_geometry` = 0, no lights).
+fn upload<T: bytemuck::Pod>(device: &Device, data: &[T]) -> Result<GpuBuffer<T>, RuntimeError> {
+    if data.is_empty() {
+        device.upload(&[T::zeroed()])
+    } else {
+        device.upload(data)
     }
 }
 

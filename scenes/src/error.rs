@@ -101,8 +101,11 @@ pub enum ErrorKind {
     NonFinite,
     /// A binary file ended before the data its header announced.
     Truncated,
-    /// A feature the renderer cannot honour and that cannot be approximated safely.
+    /// A feature the renderer cannot honour, or input Mitsuba itself rejects (unknown plugin,
+    /// element, attribute or parameter): an error unless the scene is loaded leniently.
     Unsupported,
+    /// An `<include>` or `<ref>` chain that leads back to where it started.
+    Cycle,
 }
 
 /// A failed load. `context` carries the outer places that led here (e.g. the `<shape>` element

@@ -37,6 +37,9 @@ pub use camera::{Camera, CameraFrame, FovAxis};
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use material::{Bsdf, GpuMaterial, Material};
 pub use mesh::TriMesh;
-pub use mitsuba::{load_mitsuba, load_mitsuba_str, load_mitsuba_with_params, Loaded};
+pub use mitsuba::{
+    load_mitsuba, load_mitsuba_str, load_mitsuba_str_with, load_mitsuba_with,
+    load_mitsuba_with_params, LoadOptions, Loaded,
+};
 pub use morton::{morton2d_decode, morton2d_encode, morton_pixel_order};
 pub use scene::{Integrator, Object, Scene, SceneStats, Triangles};

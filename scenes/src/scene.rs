@@ -70,13 +70,19 @@ pub struct Object {
     pub material: u32,
 }
 
-/// Integrator settings read from the scene (Mitsuba `path`); the renderer decides what to honour
-/// (it uses a fixed Russian roulette, see PAPER.md), but keeps them so a reference run can match.
+/// Integrator settings read from the scene (Mitsuba `path`, or the `path` nested in `aov` /
+/// `moment`); the renderer decides what to honour (it uses a fixed Russian roulette, see
+/// PAPER.md), but keeps them so a reference run can match.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Integrator {
+    /// Longest path, in vertices after the camera (1: only emitters seen directly; 0: nothing);
     /// -1 = unlimited (Mitsuba's convention).
     pub max_depth: i32,
+    /// Depth from which Mitsuba starts Russian roulette (>= 1).
     pub rr_depth: i32,
+    /// Mitsuba `hide_emitters`: emitters seen directly from the camera (and through
+    /// index-matched surfaces) are black.
+    pub hide_emitters: bool,
 }
 
 impl Default for Integrator {
@@ -85,6 +91,7 @@ impl Default for Integrator {
         Integrator {
             max_depth: -1,
             rr_depth: 5,
+            hide_emitters: false,
         }
     }
 }

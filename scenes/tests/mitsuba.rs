@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use cohort_scenes::{
-    load_mitsuba, load_mitsuba_str, load_mitsuba_with_params, Bsdf, Camera, ErrorKind, FovAxis,
-    Loaded, Position, SceneError,
+    load_mitsuba, load_mitsuba_str, load_mitsuba_with, load_mitsuba_with_params, Bsdf, Camera,
+    ErrorKind, FovAxis, LoadOptions, Loaded, Position, SceneError,
 };
 use glam::Vec3;
 
@@ -259,11 +259,12 @@ fn obj_with_normals_shades_smooth_unless_face_normals() {
     assert!(flat.triangles.normals.is_none());
 }
 
+/// Under `lenient`, unsupported plugins are warnings at their line, with a stand-in.
 #[test]
 fn unsupported_features_warn_with_file_and_line() {
     let xml = scene(
         r#"
-    <shape type="cylinder"/>
+    <shape type="sdfgrid"/>
     <shape type="rectangle">
         <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf>
     </shape>
@@ -276,7 +277,11 @@ fn unsupported_features_warn_with_file_and_line() {
     );
     let dir = tmp_dir("warnings");
     let path = write(&dir, "scene.xml", &xml);
-    let loaded = load_mitsuba(&path).unwrap();
+    let lenient = LoadOptions {
+        lenient: true,
+        ..Default::default()
+    };
+    let loaded = load_mitsuba_with(&path, &lenient).unwrap();
     for w in &loaded.warnings {
         println!("{w}");
         assert_eq!(w.location.file, path);
@@ -291,10 +296,10 @@ fn unsupported_features_warn_with_file_and_line() {
             "no warning containing '{text}' at line {line}"
         );
     };
-    warned_at(r#"type="cylinder""#, "unsupported shape 'cylinder'");
-    warned_at(r#"type="plastic""#, "unsupported bsdf 'plastic'");
+    warned_at(r#"type="sdfgrid""#, "shape 'sdfgrid' is not supported");
+    warned_at(r#"type="plastic""#, "bsdf 'plastic' is not supported");
     warned_at("roughness", "'roughness'");
-    warned_at("envmap", "unsupported emitter 'envmap'");
+    warned_at("envmap", "emitter 'envmap' is not supported");
     warned_at("roughconductor", "beckmann");
     warned_at("<wibble/>", "<wibble>");
     // The stand-in for plastic keeps its colour.

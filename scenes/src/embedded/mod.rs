@@ -109,6 +109,7 @@ impl Gen {
         s.integrator = Integrator {
             max_depth: -1,
             rr_depth: 1,
+            hide_emitters: false,
         };
         s.sample_count = 1;
         Gen { b }

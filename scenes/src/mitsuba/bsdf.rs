@@ -1,12 +1,25 @@
-//! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Unsupported plugins and parameters become warnings with a
-//! documented stand-in, never a silent change.
+//! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Supported: diffuse, conductor, roughconductor,
+//! dielectric, twosided (each parameter read or reported). Other plugins are errors, or under
+//! `--lenient` replaced by the nearest supported BSDF with a warning saying which.
 
 use glam::Vec3;
 
-use crate::error::{ErrorKind, SceneError};
+use crate::error::SceneError;
 use crate::material::Bsdf;
 
-use super::props::{Child, Ctx, Obj};
+use super::diag::syntax;
+use super::plugins;
+use super::props::Obj;
+use super::Ctx;
+
+/// The plugins read exactly (or with per-parameter warnings).
+pub(crate) const SUPPORTED: &[&str] = &[
+    "diffuse",
+    "conductor",
+    "roughconductor",
+    "dielectric",
+    "twosided",
+];
 
 /// A BSDF as the shape will use it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,49 +68,102 @@ pub fn named_ior(name: &str) -> Option<f32> {
     IORS.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
 }
 
-fn ior(ctx: &Ctx, obj: &Obj, name: &str, default: f32) -> Result<f32, SceneError> {
-    if let Ok(Some(v)) = obj.float(ctx, name) {
-        return Ok(v);
-    }
-    match obj.string(ctx, name)? {
+fn ior(obj: &Obj, name: &str, default: f32) -> Result<f32, SceneError> {
+    match obj.float_or_string(name)? {
         None => Ok(default),
-        Some(s) => named_ior(&s).ok_or_else(|| {
-            ctx.err(
-                obj.node_of(name),
-                ErrorKind::Syntax,
-                format!("unknown IOR name '{s}'"),
+        Some(Ok(v)) => Ok(v),
+        Some(Err(s)) => named_ior(&s).ok_or_else(|| {
+            syntax(
+                obj.loc_of(name),
+                format!(
+                    "unknown IOR name '{s}' (Mitsuba's names: {})",
+                    IORS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+                ),
             )
         }),
     }
 }
 
-/// Conductors are only supported without Fresnel (`material` = none); a named metal is approximated
-/// by a perfect reflector tinted by `specular_reflectance`.
+/// Conductors are only supported without Fresnel (`material` = none, Mitsuba's default); a named
+/// metal or eta/k is approximated by a perfect reflector tinted by `specular_reflectance`.
 fn conductor_material(ctx: &mut Ctx, obj: &Obj) -> Result<(), SceneError> {
-    let material = obj
-        .string(ctx, "material")?
-        .unwrap_or_else(|| "none".into());
+    let material = obj.string("material")?.unwrap_or_else(|| "none".into());
     if material != "none" || obj.has("eta") || obj.has("k") {
-        ctx.warn(
-            obj.node,
+        ctx.diag.warn(
+            &obj.loc,
             format!(
                 "conductor Fresnel (material '{material}', eta/k) is not supported: treated as material 'none' (F = 1)"
             ),
         );
-        // Mark them read so they are not reported twice.
-        let _ = (obj.color(ctx, "eta"), obj.color(ctx, "k"));
     }
+    obj.ignore("eta");
+    obj.ignore("k");
     Ok(())
 }
 
-/// `resolve` looks up `<ref id>` children (BSDFs defined earlier with an `id`).
-pub(crate) fn parse_bsdf(
-    ctx: &mut Ctx,
-    obj: &Obj,
-    resolve: &dyn Fn(&str) -> Option<ParsedBsdf>,
-) -> Result<ParsedBsdf, SceneError> {
-    let color = |ctx: &Ctx, name: &str, default: f32| -> Result<Vec3, SceneError> {
-        Ok(obj.color(ctx, name)?.unwrap_or(Vec3::splat(default)))
+/// Microfacet roughness: isotropic `alpha` (default 0.1) or `alpha_u` and `alpha_v` together.
+fn alpha(ctx: &mut Ctx, obj: &Obj) -> Result<f32, SceneError> {
+    let distribution = obj
+        .string("distribution")?
+        .unwrap_or_else(|| "beckmann".into());
+    match distribution.as_str() {
+        "ggx" => {}
+        "beckmann" => ctx.diag.warn(
+            &obj.loc,
+            "microfacet distribution 'beckmann' (Mitsuba's default) approximated by ggx",
+        ),
+        other => {
+            return Err(syntax(
+                obj.loc_of("distribution"),
+                format!("microfacet distribution '{other}' is not one of beckmann, ggx"),
+            ))
+        }
+    }
+    let _ = obj.boolean("sample_visible")?;
+    let alpha = match (obj.float("alpha_u")?, obj.float("alpha_v")?) {
+        (Some(u), Some(v)) => {
+            if u != v {
+                ctx.diag.warn(
+                    &obj.loc,
+                    "anisotropic roughness approximated by sqrt(alpha_u * alpha_v)",
+                );
+            }
+            if obj.has("alpha") {
+                return Err(syntax(
+                    obj.loc_of("alpha"),
+                    "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+                ));
+            }
+            (u * v).sqrt()
+        }
+        (None, None) => obj.float("alpha")?.unwrap_or(0.1),
+        _ => {
+            return Err(syntax(
+                &obj.loc,
+                "both 'alpha_u' and 'alpha_v' must be given",
+            ))
+        }
+    };
+    if alpha.is_nan() || alpha < 0.0 {
+        return Err(syntax(obj.loc_of("alpha"), "alpha must be >= 0"));
+    }
+    Ok(alpha)
+}
+
+/// The BSDF of `obj`, parsed once per object (a BSDF referenced by many shapes is reported once).
+pub(crate) fn parse_bsdf<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let key = obj as *const Obj as usize;
+    if let Some(b) = ctx.bsdfs.get(&key) {
+        return Ok(*b);
+    }
+    let b = parse_uncached(ctx, obj)?;
+    ctx.bsdfs.insert(key, b);
+    Ok(b)
+}
+
+fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let color = |ctx: &mut Ctx<'a>, name: &str, default: f32| -> Result<Vec3, SceneError> {
+        Ok(ctx.color(obj, name)?.unwrap_or(Vec3::splat(default)))
     };
     let bsdf = match obj.plugin.as_str() {
         "diffuse" => Bsdf::Diffuse {
@@ -111,119 +177,162 @@ pub(crate) fn parse_bsdf(
         }
         "roughconductor" => {
             conductor_material(ctx, obj)?;
-            let distribution = obj
-                .string(ctx, "distribution")?
-                .unwrap_or_else(|| "beckmann".into());
-            if distribution != "ggx" {
-                ctx.warn(
-                    obj.node,
-                    format!("microfacet distribution '{distribution}' approximated by ggx (Mitsuba's default is beckmann)"),
+            let alpha = alpha(ctx, obj)?;
+            let specular_reflectance = color(ctx, "specular_reflectance", 1.0)?;
+            if alpha == 0.0 {
+                ctx.diag.warn(
+                    obj.loc_of("alpha"),
+                    "roughconductor with alpha 0 rendered as a smooth conductor",
                 );
-            }
-            let _ = obj.boolean(ctx, "sample_visible")?;
-            let alpha = match (obj.float(ctx, "alpha_u")?, obj.float(ctx, "alpha_v")?) {
-                (Some(u), Some(v)) => {
-                    if u != v {
-                        ctx.warn(
-                            obj.node,
-                            "anisotropic roughness approximated by sqrt(alpha_u * alpha_v)",
-                        );
-                    }
-                    (u * v).sqrt()
+                Bsdf::Conductor {
+                    specular_reflectance,
                 }
-                _ => obj.float(ctx, "alpha")?.unwrap_or(0.1),
-            };
-            if alpha <= 0.0 {
-                return Err(ctx.err(
-                    obj.node_of("alpha"),
-                    ErrorKind::Syntax,
-                    "alpha must be positive",
-                ));
-            }
-            Bsdf::RoughConductor {
-                alpha,
-                specular_reflectance: color(ctx, "specular_reflectance", 1.0)?,
-            }
-        }
-        "dielectric" => {
-            let int_ior = ior(ctx, obj, "int_ior", 1.5046)?;
-            let ext_ior = ior(ctx, obj, "ext_ior", 1.00028)?;
-            if !(int_ior > 0.0 && ext_ior > 0.0) {
-                return Err(ctx.err(
-                    obj.node,
-                    ErrorKind::Syntax,
-                    "indices of refraction must be positive",
-                ));
-            }
-            Bsdf::Dielectric {
-                int_ior,
-                ext_ior,
-                specular_reflectance: color(ctx, "specular_reflectance", 1.0)?,
-                specular_transmittance: color(ctx, "specular_transmittance", 1.0)?,
-            }
-        }
-        "twosided" => {
-            let mut inner = Vec::new();
-            for child in &obj.children {
-                match child {
-                    Child::Object(o) if o.tag == "bsdf" => inner.push(parse_bsdf(ctx, o, resolve)?),
-                    Child::Ref { id, node } => inner.push(resolve(id).ok_or_else(|| {
-                        ctx.err(*node, ErrorKind::Syntax, format!("no BSDF with id '{id}'"))
-                    })?),
-                    Child::Object(o) => {
-                        ctx.warn(o.node, format!("<{}> inside twosided ignored", o.tag));
-                    }
+            } else {
+                Bsdf::RoughConductor {
+                    alpha,
+                    specular_reflectance,
                 }
             }
-            let Some(front) = inner.first().copied() else {
-                return Err(ctx.err(
-                    obj.node,
-                    ErrorKind::Syntax,
-                    "twosided needs a nested <bsdf>",
-                ));
-            };
-            if inner.len() > 1 {
-                ctx.warn(
-                    obj.node,
-                    "twosided with a different back BSDF: the front BSDF is used on both sides",
-                );
-            }
-            obj.warn_unused(ctx);
-            return Ok(ParsedBsdf {
-                bsdf: front.bsdf,
-                two_sided: true,
-            });
         }
-        other => {
-            // Keep whatever colour the author gave so the stand-in is at least the right shade.
-            let reflectance = ["reflectance", "diffuse_reflectance", "base_color"]
-                .iter()
-                .find_map(|n| obj.color(ctx, n).ok().flatten())
-                .unwrap_or(Vec3::splat(0.5));
-            ctx.warn(
-                obj.node,
-                format!("unsupported bsdf '{other}' replaced by diffuse {reflectance}"),
-            );
-            return Ok(ParsedBsdf {
-                bsdf: Bsdf::Diffuse { reflectance },
-                two_sided: false,
-            });
-        }
+        "dielectric" => dielectric(ctx, obj)?,
+        "twosided" => return twosided(ctx, obj),
+        _ => return stand_in(ctx, obj),
     };
-    for child in &obj.children {
-        match child {
-            Child::Object(o) => ctx.warn(
-                o.node,
-                format!("<{}> inside bsdf '{}' ignored", o.tag, obj.plugin),
-            ),
-            Child::Ref { node, .. } => {
-                ctx.warn(*node, format!("<ref> inside bsdf '{}' ignored", obj.plugin))
-            }
-        }
-    }
-    obj.warn_unused(ctx);
+    obj.finish(&mut ctx.diag)?;
     Ok(ParsedBsdf {
         bsdf,
         two_sided: false,
     })
+}
+
+fn dielectric<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
+    let int_ior = ior(obj, "int_ior", 1.5046)?;
+    let ext_ior = ior(obj, "ext_ior", 1.00028)?;
+    if !(int_ior > 0.0 && ext_ior > 0.0) {
+        return Err(syntax(&obj.loc, "indices of refraction must be positive"));
+    }
+    Ok(Bsdf::Dielectric {
+        int_ior,
+        ext_ior,
+        specular_reflectance: ctx.color(obj, "specular_reflectance")?.unwrap_or(Vec3::ONE),
+        specular_transmittance: ctx
+            .color(obj, "specular_transmittance")?
+            .unwrap_or(Vec3::ONE),
+    })
+}
+
+fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let mut inner = Vec::new();
+    for c in &obj.children {
+        let t = ctx.target(c)?;
+        if t.tag == "bsdf" {
+            c.take();
+            inner.push(parse_bsdf(ctx, t)?);
+        }
+    }
+    if inner
+        .iter()
+        .any(|b| matches!(b.bsdf, Bsdf::Dielectric { .. }))
+    {
+        return Err(syntax(
+            &obj.loc,
+            "twosided can only wrap materials without transmission (not a dielectric)",
+        ));
+    }
+    let front = match inner.as_slice() {
+        [] => {
+            return Err(syntax(
+                &obj.loc,
+                "twosided needs a nested <bsdf> (or a <ref> to one)",
+            ))
+        }
+        [front] => *front,
+        [front, back] => {
+            if front.bsdf != back.bsdf {
+                ctx.diag.warn(
+                    &obj.loc,
+                    "twosided with a different back BSDF: the front BSDF is used on both sides",
+                );
+            }
+            *front
+        }
+        _ => return Err(syntax(&obj.loc, "twosided takes at most two nested BSDFs")),
+    };
+    obj.finish(&mut ctx.diag)?;
+    Ok(ParsedBsdf {
+        bsdf: front.bsdf,
+        two_sided: true,
+    })
+}
+
+/// A plugin the renderer does not implement: an error, or (lenient) the nearest supported BSDF.
+fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let what = plugins::describe("bsdf", &obj.plugin);
+    if !ctx.diag.lenient {
+        // Fail on the plugin itself, before anything its parameters could report.
+        let instead = match obj.plugin.as_str() {
+            "roughdielectric" | "thindielectric" | "null" => "replaced by a smooth dielectric",
+            "mask" | "bumpmap" | "normalmap" | "blendbsdf" => "replaced by its nested BSDF",
+            _ => "replaced by a diffuse BSDF of its colour",
+        };
+        ctx.diag.unsupported(&obj.loc, &what, instead)?;
+    }
+    // A colour for the stand-in: the first of `names` given as a plain value or texture.
+    let colour = |ctx: &mut Ctx<'a>, names: &[&str], default: f32| -> Result<Vec3, SceneError> {
+        for n in names {
+            if let Ok(Some(c)) = ctx.color(obj, n) {
+                return Ok(c);
+            }
+        }
+        Ok(Vec3::splat(default))
+    };
+    let nested = |ctx: &mut Ctx<'a>| -> Result<Option<ParsedBsdf>, SceneError> {
+        for c in &obj.children {
+            let t = ctx.target(c)?;
+            if t.tag == "bsdf" {
+                return parse_bsdf(ctx, t).map(Some);
+            }
+        }
+        Ok(None)
+    };
+    let diffuse = |reflectance: Vec3| ParsedBsdf {
+        bsdf: Bsdf::Diffuse { reflectance },
+        two_sided: false,
+    };
+    let (parsed, instead) = match obj.plugin.as_str() {
+        "roughdielectric" | "thindielectric" => {
+            let b = ParsedBsdf {
+                bsdf: dielectric(ctx, obj)?,
+                two_sided: false,
+            };
+            (b, "replaced by a smooth dielectric with its IORs".to_string())
+        }
+        "null" => (
+            ParsedBsdf {
+                bsdf: Bsdf::Dielectric {
+                    int_ior: 1.0,
+                    ext_ior: 1.0,
+                    specular_reflectance: Vec3::ONE,
+                    specular_transmittance: Vec3::ONE,
+                },
+                two_sided: false,
+            },
+            "replaced by an index-matched dielectric (invisible to paths, but it blocks light samples)"
+                .to_string(),
+        ),
+        "mask" | "bumpmap" | "normalmap" | "blendbsdf" => match nested(ctx)? {
+            Some(b) => (b, "replaced by its (first) nested BSDF".to_string()),
+            None => (DEFAULT_BSDF, "replaced by diffuse 0.5".to_string()),
+        },
+        _ => {
+            let r = colour(
+                ctx,
+                &["diffuse_reflectance", "reflectance", "base_color"],
+                0.5,
+            )?;
+            (diffuse(r), format!("replaced by diffuse {r}"))
+        }
+    };
+    ctx.diag.unsupported(&obj.loc, what, instead)?;
+    Ok(parsed)
 }

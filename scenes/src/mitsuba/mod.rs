@@ -1,29 +1,42 @@
-//! Mitsuba 3 XML (the subset in shared/scenes/*/README.md) → [`Scene`] + warnings.
+//! Mitsuba 3 XML → [`Scene`] + warnings, read as Mitsuba 3.9 reads it.
 //!
-//! Stages: roxmltree parses the text (positions kept for line numbers); `<default>` elements fill
-//! the `$parameter` table; each plugin element becomes a typed property bag (`props.rs`); the plugin
-//! interpreters (`sensor`, `bsdf.rs`, `shape.rs`, emitters, integrator) consume the properties they
-//! support and the rest is reported. Errors stop the load with file and line; anything merely
-//! unsupported is a [`Warning`] with file and line.
+//! Stages:
+//! 1. `xml.rs`: the files → one element tree: `$parameter` substitution and `<default>`s,
+//!    `<include>` (with cycle detection), `<path>` search folders, `version` (and the upgrade of
+//!    pre-2.0 names).
+//! 2. `props.rs`: elements → plugin objects with typed properties, nested objects and `<ref>`s;
+//!    the global `id` table; unresolved and circular references are errors.
+//! 3. the plugin interpreters (`sensor`, `bsdf.rs`, `shape.rs`, emitters, integrator) consume
+//!    the properties they support.
+//!
+//! Malformed input is an error with file and line. What Mitsuba itself rejects (unknown plugins,
+//! elements, attributes, properties) and plugins the renderer does not implement are errors too,
+//! unless [`LoadOptions::lenient`] turns each into a [`Warning`] saying what was done instead.
+//! Approximations of supported plugins (e.g. a beckmann roughness read as ggx) are always
+//! warnings. The README's table lists what is read, approximated and refused.
 
 mod bsdf;
+mod diag;
+mod plugins;
 mod props;
 mod shape;
 mod transform;
+mod xml;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use roxmltree::Node;
 
 use crate::builder::SceneBuilder;
 use crate::camera::{Camera, FovAxis};
-use crate::error::{ErrorKind, Location, SceneError, Warning};
+use crate::error::{SceneError, Warning};
 use crate::scene::{Integrator, Scene};
 
 pub use bsdf::named_ior;
-use props::{is_object_tag, parse_object, Child, Ctx, Obj};
+use bsdf::ParsedBsdf;
+use diag::{syntax, Diag};
+use props::{Ids, Kind, Obj};
 
 /// A loaded scene and what the loader had to ignore or approximate (callers print these).
 #[derive(Clone, Debug)]
@@ -32,9 +45,19 @@ pub struct Loaded {
     pub warnings: Vec<Warning>,
 }
 
-/// Loads a Mitsuba 3 XML scene; mesh files are resolved relative to the file's directory.
+/// How to read a scene.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// `$name` parameters, overriding the file's `<default>`s (Mitsuba's `-D name=value`).
+    pub params: Vec<(String, String)>,
+    /// Unknown or unsupported plugins, elements, attributes and parameters become warnings (the
+    /// object skipped or replaced by the nearest supported one) instead of errors.
+    pub lenient: bool,
+}
+
+/// Loads a Mitsuba 3 XML scene strictly; file names resolve as in Mitsuba (see `xml.rs`).
 pub fn load_mitsuba(path: impl AsRef<Path>) -> Result<Loaded, SceneError> {
-    load_mitsuba_with_params(path, &[])
+    load_mitsuba_with(path, &LoadOptions::default())
 }
 
 /// Like [`load_mitsuba`], with `$name` parameters overriding the file's `<default>`s (Mitsuba's
@@ -43,149 +66,277 @@ pub fn load_mitsuba_with_params(
     path: impl AsRef<Path>,
     params: &[(&str, &str)],
 ) -> Result<Loaded, SceneError> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        SceneError::new(
-            ErrorKind::Io,
-            Location::file(path),
-            format!("cannot read scene file: {e}"),
-        )
-    })?;
-    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    load(&text, path.to_path_buf(), base, params)
+    let options = LoadOptions {
+        params: params
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+        lenient: false,
+    };
+    load_mitsuba_with(path, &options)
 }
 
-/// Loads a scene from XML text. Mesh files resolve relative to `base_dir`; locations name the file
-/// `<string>`.
+pub fn load_mitsuba_with(
+    path: impl AsRef<Path>,
+    options: &LoadOptions,
+) -> Result<Loaded, SceneError> {
+    load(xml::Source::File(path.as_ref()), options)
+}
+
+/// Loads a scene from XML text, strictly. File names resolve relative to `base_dir` (then the
+/// working directory); locations name the file `<string>`.
 pub fn load_mitsuba_str(xml: &str, base_dir: impl AsRef<Path>) -> Result<Loaded, SceneError> {
+    load_mitsuba_str_with(xml, base_dir, &LoadOptions::default())
+}
+
+pub fn load_mitsuba_str_with(
+    xml: &str,
+    base_dir: impl AsRef<Path>,
+    options: &LoadOptions,
+) -> Result<Loaded, SceneError> {
     load(
-        xml,
-        PathBuf::from("<string>"),
-        base_dir.as_ref().to_path_buf(),
-        &[],
+        xml::Source::Text {
+            text: xml,
+            base_dir: base_dir.as_ref(),
+        },
+        options,
     )
 }
 
-fn load(
-    text: &str,
-    file: PathBuf,
-    base_dir: PathBuf,
-    overrides: &[(&str, &str)],
-) -> Result<Loaded, SceneError> {
-    let doc = roxmltree::Document::parse(text).map_err(|e| {
-        SceneError::new(
-            ErrorKind::Xml,
-            Location::line(&file, e.pos().row),
-            format!("malformed XML: {e}"),
-        )
-    })?;
-    let mut ctx = Ctx {
-        file,
-        base_dir,
-        doc: &doc,
-        params: HashMap::new(),
-        warnings: Vec::new(),
-    };
-    let root = doc.root_element();
-    if root.tag_name().name() != "scene" {
-        return Err(ctx.err(root, ErrorKind::Syntax, "the root element must be <scene>"));
-    }
-    match ctx.attr(root, "version")? {
-        Some(v) if v.split('.').next() == Some("3") => {}
-        Some(v) => ctx.warn(
-            root,
-            format!("scene version {v}: read with Mitsuba 3 semantics"),
-        ),
-        None => ctx.warn(root, "scene has no version; read with Mitsuba 3 semantics"),
-    }
+/// State of the plugin stage.
+pub(crate) struct Ctx<'a> {
+    pub diag: Diag,
+    pub ids: Ids<'a>,
+    /// Folders searched for mesh files.
+    pub search: Vec<PathBuf>,
+    /// Parsed BSDFs by object address.
+    pub bsdfs: HashMap<usize, ParsedBsdf>,
+    /// Area emitters already attached to a shape, by object address.
+    pub attached: Vec<usize>,
+}
 
-    // `<default>`s anywhere at the top level apply to the whole file; explicit overrides win.
-    for node in root.children().filter(|n| n.has_tag_name("default")) {
-        let name = ctx.req_attr(node, "name")?;
-        let value = ctx.req_attr(node, "value")?;
-        ctx.params.entry(name).or_insert(value);
-    }
-    for (k, v) in overrides {
-        ctx.params.insert(k.to_string(), v.to_string());
-    }
-
-    let mut camera = None;
-    let mut environment = Vec3::ZERO;
-    let mut integrator = Integrator::default();
-    let mut sample_count = 1;
-    let mut builder = SceneBuilder::new(default_camera());
-    let mut bsdfs = Vec::new();
-
-    for node in root.children().filter(Node::is_element) {
-        let tag = node.tag_name().name();
-        if tag == "default" {
-            continue;
+impl<'a> Ctx<'a> {
+    /// The object a child is or refers to.
+    pub fn target(&self, c: &'a props::Child) -> Result<&'a Obj, SceneError> {
+        match &c.kind {
+            Kind::Object(o) => Ok(o),
+            Kind::Ref(id) => self
+                .ids
+                .get(id)
+                .copied()
+                .ok_or_else(|| syntax(&c.loc, format!("<ref>: no object has id '{id}'"))),
         }
-        if !is_object_tag(tag) {
-            ctx.warn(node, format!("unsupported element <{tag}> ignored"));
-            continue;
+    }
+
+    /// A colour parameter given as a value, or as a texture (nested or `<ref name=...>`).
+    pub fn color(&mut self, obj: &'a Obj, name: &str) -> Result<Option<Vec3>, SceneError> {
+        if let Some(v) = obj.color(name)? {
+            return Ok(Some(v));
         }
-        let obj = parse_object(&mut ctx, node)?;
-        match tag {
-            "shape" => shape::add_shape(&mut ctx, &obj, &mut builder, &mut bsdfs)?,
-            "bsdf" => {
-                let parsed = bsdf::parse_bsdf(&mut ctx, &obj, &|id| {
-                    bsdfs.iter().rev().find(|(i, _)| i == id).map(|(_, b)| *b)
-                })?;
-                match &obj.id {
-                    Some(id) => bsdfs.push((id.clone(), parsed)),
-                    None => ctx.warn(node, "top-level <bsdf> without an id can never be used"),
-                }
-            }
-            "sensor" if camera.is_some() => {
-                ctx.warn(node, "only the first sensor is used; this one is ignored")
-            }
-            "sensor" => {
-                let (cam, spp) = parse_sensor(&mut ctx, &obj)?;
-                camera = Some(cam);
-                sample_count = spp;
-            }
-            "integrator" => integrator = parse_integrator(&mut ctx, &obj)?,
-            "emitter" => match obj.plugin.as_str() {
-                "constant" => {
-                    let radiance = obj.color(&ctx, "radiance")?.unwrap_or(Vec3::ONE);
-                    if !radiance.is_finite() || radiance.min_element() < 0.0 {
-                        return Err(ctx.err(
-                            obj.node_of("radiance"),
-                            ErrorKind::Syntax,
-                            "radiance must be finite and >= 0",
-                        ));
-                    }
-                    obj.warn_unused(&mut ctx);
-                    // Mitsuba sums emitters; two constant skies add.
-                    environment += radiance;
-                }
-                "area" => ctx.warn(node, "an area emitter must be nested in a <shape>; ignored"),
-                other => ctx.warn(node, format!("unsupported emitter '{other}' ignored")),
-            },
-            other => ctx.warn(
-                node,
+        let Some(c) = obj.child_named(name) else {
+            return Ok(None);
+        };
+        let t = self.target(c)?;
+        if t.tag != "texture" {
+            return Err(syntax(
+                &c.loc,
                 format!(
-                    "<{other} type=\"{}\"> is not supported and was ignored",
-                    obj.plugin
+                    "'{name}' of {} '{}' must be a colour or a texture, not a <{}>",
+                    obj.tag, obj.plugin, t.tag
                 ),
-            ),
+            ));
         }
+        self.texture(t).map(Some)
     }
 
-    let camera = camera.unwrap_or_else(|| {
-        ctx.warn(root, "scene has no sensor; using Mitsuba's default camera");
-        default_camera()
+    /// A texture as one colour: exact for the constant plugins, otherwise unsupported (lenient:
+    /// its mean where known, grey 0.5 otherwise).
+    fn texture(&mut self, t: &'a Obj) -> Result<Vec3, SceneError> {
+        let value = match t.plugin.as_str() {
+            "uniform" => t
+                .float("value")?
+                .map(Vec3::splat)
+                .ok_or_else(|| syntax(&t.loc, "texture 'uniform' needs a 'value'"))?,
+            "srgb" => {
+                let _ = t.boolean("unbounded")?;
+                t.color("color")?
+                    .ok_or_else(|| syntax(&t.loc, "texture 'srgb' needs a 'color'"))?
+            }
+            "checkerboard" => {
+                let what = "texture 'checkerboard' is not supported (the renderer has no texture coordinates)";
+                if !self.diag.lenient {
+                    self.diag
+                        .unsupported(&t.loc, what, "replaced by its mean colour")?;
+                }
+                let c0 = self.color(t, "color0")?.unwrap_or(Vec3::splat(0.4));
+                let c1 = self.color(t, "color1")?.unwrap_or(Vec3::splat(0.2));
+                t.ignore("to_uv");
+                let mean = 0.5 * (c0 + c1);
+                self.diag.unsupported(
+                    &t.loc,
+                    what,
+                    format!("replaced by its mean colour {mean}"),
+                )?;
+                return Ok(mean);
+            }
+            other => {
+                let what = match t.string("filename") {
+                    Ok(Some(f)) if other == "bitmap" => format!(
+                        "texture 'bitmap' ('{f}') is not supported (the renderer has no texture coordinates)"
+                    ),
+                    _ => plugins::describe("texture", other),
+                };
+                self.diag
+                    .unsupported(&t.loc, what, "replaced by grey 0.5")?;
+                return Ok(Vec3::splat(0.5));
+            }
+        };
+        t.finish(&mut self.diag)?;
+        Ok(value)
+    }
+}
+
+fn load(source: xml::Source, options: &LoadOptions) -> Result<Loaded, SceneError> {
+    let mut diag = Diag::new(options.lenient);
+    let doc = xml::read(&mut diag, source, &options.params)?;
+    let (scene, warnings) = build(diag, &doc).map_err(|e| doc.with_includes(e))?;
+    // A referenced object may be interpreted more than once: report each finding once.
+    let mut unique: Vec<Warning> = Vec::new();
+    for w in warnings {
+        if !unique.contains(&w) {
+            unique.push(w);
+        }
+    }
+    Ok(Loaded {
+        scene,
+        warnings: unique,
+    })
+}
+
+/// Stages 2 and 3.
+fn build(mut diag: Diag, doc: &xml::Document) -> Result<(Scene, Vec<Warning>), SceneError> {
+    let (scene_obj, aliases) = props::parse_scene(&mut diag, &doc.root)?;
+    let ids = props::index(&scene_obj, &aliases)?;
+    props::check_refs(&scene_obj, &ids)?;
+    let mut ctx = Ctx {
+        diag,
+        ids,
+        search: doc.search.clone(),
+        bsdfs: HashMap::new(),
+        attached: Vec::new(),
+    };
+    let scene = interpret(&mut ctx, &scene_obj)?;
+    Ok((scene, ctx.diag.warnings))
+}
+
+fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> {
+    let mut camera: Option<(Camera, u32)> = None;
+    let mut environment: Option<Vec3> = None;
+    let mut integrator: Option<Integrator> = None;
+    let mut builder = SceneBuilder::new(default_camera());
+
+    for c in &root.children {
+        c.take();
+        let obj = ctx.target(c)?;
+        let by_ref = matches!(c.kind, Kind::Ref(_));
+        match obj.tag.as_str() {
+            // Mitsuba adds a shape (or emitter) once per top-level occurrence, references included.
+            "shape" => shape::add_shape(ctx, obj, &mut builder)?,
+            "emitter" => emitter(ctx, obj, &mut environment)?,
+            "sensor" if camera.is_some() => ctx.diag.warn(
+                &c.loc,
+                "only the first sensor is rendered; this one is ignored",
+            ),
+            "sensor" => camera = Some(parse_sensor(ctx, obj)?),
+            "integrator" if integrator.is_some() => ctx.diag.unsupported(
+                &c.loc,
+                "a second <integrator> (Mitsuba allows one per scene)",
+                "ignored; the first is used",
+            )?,
+            "integrator" => integrator = Some(parse_integrator(ctx, obj)?),
+            // Other objects only matter where they are used (a BSDF by a shape, a film by a
+            // sensor...); Mitsuba instantiates them all, so an unknown plugin is still refused,
+            // and a supported BSDF is checked.
+            _ if by_ref => {}
+            "bsdf" if bsdf::SUPPORTED.contains(&obj.plugin.as_str()) => {
+                bsdf::parse_bsdf(ctx, obj)?;
+                if obj.id.is_none() {
+                    ctx.diag
+                        .warn(&obj.loc, "top-level <bsdf> without an id can never be used");
+                }
+            }
+            tag if !plugins::is_known(tag, &obj.plugin) => {
+                ctx.diag
+                    .unsupported(&obj.loc, plugins::describe(tag, &obj.plugin), "ignored")?
+            }
+            _ => {}
+        }
+    }
+    root.finish(&mut ctx.diag)?;
+
+    let (camera, sample_count) = camera.unwrap_or_else(|| {
+        ctx.diag.warn(
+            &root.loc,
+            "scene has no sensor (Mitsuba renders nothing); using Mitsuba's default camera",
+        );
+        (default_camera(), 4)
+    });
+    let integrator = integrator.unwrap_or_else(|| {
+        ctx.diag.warn(
+            &root.loc,
+            "scene has no <integrator> (Mitsuba refuses to render it); using 'path' with Mitsuba's defaults",
+        );
+        Integrator::default()
     });
     let scene = builder.scene_mut();
     scene.camera = camera;
-    scene.environment = environment;
+    scene.environment = environment.unwrap_or(Vec3::ZERO);
     scene.integrator = integrator;
     scene.sample_count = sample_count;
-    Ok(Loaded {
-        scene: builder.finish(),
-        warnings: ctx.warnings,
-    })
+    Ok(builder.finish())
+}
+
+fn emitter<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
+    environment: &mut Option<Vec3>,
+) -> Result<(), SceneError> {
+    match obj.plugin.as_str() {
+        "constant" => {
+            let radiance = ctx.color(obj, "radiance")?.unwrap_or(Vec3::ONE);
+            if !radiance.is_finite() || radiance.min_element() < 0.0 {
+                return Err(syntax(
+                    obj.loc_of("radiance"),
+                    "radiance must be finite and >= 0",
+                ));
+            }
+            obj.finish(&mut ctx.diag)?;
+            match environment {
+                Some(first) => {
+                    ctx.diag.unsupported(
+                        &obj.loc,
+                        "a second environment emitter (Mitsuba allows one per scene)",
+                        "added to the first",
+                    )?;
+                    *first += radiance;
+                }
+                None => *environment = Some(radiance),
+            }
+            Ok(())
+        }
+        // With an id it is attached where a shape refers to it; Mitsuba drops a bare one.
+        "area" if obj.id.is_some() => Ok(()),
+        "area" => {
+            ctx.diag.warn(
+                &obj.loc,
+                "an area emitter must be nested in a <shape>; ignored (as Mitsuba does)",
+            );
+            Ok(())
+        }
+        other => ctx
+            .diag
+            .unsupported(&obj.loc, plugins::describe("emitter", other), "skipped"),
+    }
 }
 
 /// Mitsuba's default sensor: perspective at the origin looking down +z, 50 mm lens, 768 x 576 film.
@@ -206,31 +357,76 @@ fn fov_from_focal_length(mm: f64) -> f32 {
     (2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * mm)).atan()).to_degrees() as f32
 }
 
-fn parse_sensor(ctx: &mut Ctx, obj: &Obj) -> Result<(Camera, u32), SceneError> {
-    if obj.plugin != "perspective" {
-        ctx.warn(
-            obj.node,
-            format!(
-                "sensor '{}' treated as a perspective pinhole camera",
-                obj.plugin
-            ),
-        );
+fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), SceneError> {
+    match obj.plugin.as_str() {
+        "perspective" => {}
+        "thinlens" => {
+            ctx.diag.unsupported(
+                &obj.loc,
+                "sensor 'thinlens' (depth of field) is not supported by the renderer",
+                "rendered as a pinhole perspective camera",
+            )?;
+            obj.ignore("aperture_radius");
+            obj.ignore("focus_distance");
+        }
+        other => {
+            ctx.diag.unsupported(
+                &obj.loc,
+                plugins::describe("sensor", other),
+                "replaced by a perspective camera with its to_world and fov",
+            )?;
+            // Read what a perspective camera would; the rest is the unsupported plugin's.
+            let camera = read_perspective(ctx, obj)?;
+            let (w, h, spp) = read_film_and_sampler(ctx, obj, true)?;
+            return Ok((
+                Camera {
+                    width: w,
+                    height: h,
+                    ..camera
+                },
+                spp,
+            ));
+        }
     }
-    let to_world = obj.transform(ctx, "to_world")?.unwrap_or(Mat4::IDENTITY);
-    let (fov, fov_axis) = match (obj.float(ctx, "fov")?, obj.string(ctx, "focal_length")?) {
+    let camera = read_perspective(ctx, obj)?;
+    for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+        if obj.float(name)?.is_some_and(|v| v != 0.0) {
+            ctx.diag.warn(
+                obj.loc_of(name),
+                format!("{name} is not supported: the principal point stays centred"),
+            );
+        }
+    }
+    // No motion blur in a static scene; a spectral response has no effect on an RGB film.
+    obj.ignore("shutter_open");
+    obj.ignore("shutter_close");
+    obj.ignore("srf");
+    let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+    obj.finish(&mut ctx.diag)?;
+    Ok((
+        Camera {
+            width,
+            height,
+            ..camera
+        },
+        spp,
+    ))
+}
+
+fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
+    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let (fov, fov_axis) = match (obj.float("fov")?, obj.string("focal_length")?) {
         (Some(_), Some(_)) => {
-            return Err(ctx.err(
-                obj.node,
-                ErrorKind::Syntax,
+            return Err(syntax(
+                &obj.loc,
                 "give either 'fov' or 'focal_length', not both",
             ))
         }
         (Some(fov), None) => {
-            let axis = obj.string(ctx, "fov_axis")?.unwrap_or_else(|| "x".into());
+            let axis = obj.string("fov_axis")?.unwrap_or_else(|| "x".into());
             let axis = FovAxis::parse(&axis).ok_or_else(|| {
-                ctx.err(
-                    obj.node_of("fov_axis"),
-                    ErrorKind::Syntax,
+                syntax(
+                    obj.loc_of("fov_axis"),
                     format!("fov_axis '{axis}' is not one of x, y, diagonal, smaller, larger"),
                 )
             })?;
@@ -238,161 +434,314 @@ fn parse_sensor(ctx: &mut Ctx, obj: &Obj) -> Result<(Camera, u32), SceneError> {
         }
         (None, focal) => {
             let f = focal.unwrap_or_else(|| "50mm".into());
-            let mm = ctx.number(obj.node_of("focal_length"), f.trim_end_matches("mm"))?;
+            let mm = props::number(obj.loc_of("focal_length"), f.trim_end_matches("mm"))?;
             (fov_from_focal_length(mm), FovAxis::Diagonal)
         }
     };
     if !(fov > 0.0 && fov < 180.0) {
-        return Err(ctx.err(
-            obj.node_of("fov"),
-            ErrorKind::Syntax,
+        return Err(syntax(
+            obj.loc_of("fov"),
             format!("fov {fov} is not in (0, 180)"),
         ));
     }
-    let near_clip = obj.float(ctx, "near_clip")?.unwrap_or(1e-2);
-    let far_clip = obj.float(ctx, "far_clip")?.unwrap_or(1e4);
-    // Pinhole: lens parameters of thinlens have no effect.
-    if obj.plugin == "thinlens" {
-        let _ = (
-            obj.float(ctx, "aperture_radius")?,
-            obj.float(ctx, "focus_distance")?,
+    let near_clip = obj.float("near_clip")?.unwrap_or(1e-2);
+    let far_clip = obj.float("far_clip")?.unwrap_or(1e4);
+    if !(near_clip > 0.0 && near_clip < far_clip) {
+        return Err(syntax(
+            obj.loc_of("near_clip"),
+            "near_clip must be positive and less than far_clip",
+        ));
+    }
+    if near_clip != 1e-2 || far_clip != 1e4 {
+        ctx.diag.warn(
+            obj.loc_of(if near_clip != 1e-2 {
+                "near_clip"
+            } else {
+                "far_clip"
+            }),
+            "near_clip/far_clip are not supported by the renderer: nothing is clipped",
         );
     }
+    Ok(Camera {
+        to_world,
+        fov,
+        fov_axis,
+        width: 768,
+        height: 576,
+        near_clip,
+        far_clip,
+    })
+}
 
+/// The sensor's film size and sample count (Mitsuba's defaults: 768 x 576, 4 samples).
+fn read_film_and_sampler<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
+    quiet: bool,
+) -> Result<(u32, u32, u32), SceneError> {
     let (mut width, mut height, mut spp) = (768, 576, 4);
     let mut saw_film = false;
     for child in &obj.children {
-        let Child::Object(c) = child else {
-            if let Child::Ref { node, .. } = child {
-                ctx.warn(*node, "<ref> inside a sensor ignored");
-            }
-            continue;
-        };
+        let c = ctx.target(child)?;
         match c.tag.as_str() {
             "film" => {
+                child.take();
                 saw_film = true;
                 if c.plugin != "hdrfilm" {
-                    ctx.warn(c.node, format!("film '{}' treated as hdrfilm", c.plugin));
+                    ctx.diag.unsupported(
+                        &c.loc,
+                        plugins::describe("film", &c.plugin),
+                        "read as hdrfilm",
+                    )?;
                 }
                 for (slot, name) in [(&mut width, "width"), (&mut height, "height")] {
-                    if let Some(v) = c.integer(ctx, name)? {
+                    if let Some(v) = c.integer(name)? {
                         *slot = u32::try_from(v).ok().filter(|&v| v > 0).ok_or_else(|| {
-                            ctx.err(
-                                c.node_of(name),
-                                ErrorKind::Syntax,
-                                format!("film {name} must be positive"),
-                            )
+                            syntax(c.loc_of(name), format!("film {name} must be positive"))
                         })?;
                     }
                 }
-                // Output encoding only: nothing to do for an in-memory linear RGB film.
-                for name in ["pixel_format", "component_format", "file_format"] {
-                    let _ = c.string(ctx, name)?;
-                }
-                let _ = c.boolean(ctx, "banner")?;
-                let mut saw_filter = false;
-                for f in &c.children {
-                    match f {
-                        Child::Object(f) if f.tag == "rfilter" => {
-                            saw_filter = true;
-                            if f.plugin != "box" {
-                                ctx.warn(f.node, format!("rfilter '{}' replaced by box (the renderer splats each sample into its own pixel)", f.plugin));
-                            }
-                            f.warn_unused(ctx);
-                        }
-                        Child::Object(f) => {
-                            ctx.warn(f.node, format!("<{}> inside a film ignored", f.tag))
-                        }
-                        Child::Ref { node, .. } => ctx.warn(*node, "<ref> inside a film ignored"),
-                    }
-                }
-                if !saw_filter {
-                    ctx.warn(c.node, "film has no rfilter (Mitsuba's default is gaussian); the renderer uses box");
-                }
-                c.warn_unused(ctx);
-            }
-            "sampler" => {
-                if c.plugin != "independent" {
-                    ctx.warn(
-                        c.node,
-                        format!("sampler '{}' treated as independent", c.plugin),
+                if [
+                    "crop_offset_x",
+                    "crop_offset_y",
+                    "crop_width",
+                    "crop_height",
+                ]
+                .iter()
+                .any(|n| c.has(n))
+                {
+                    ctx.diag.warn(
+                        &c.loc,
+                        "film crop window is not supported: the whole film is rendered",
                     );
                 }
-                if let Some(n) = c.integer(ctx, "sample_count")? {
+                if let Some(f) = c.string("pixel_format")? {
+                    if !matches!(f.to_ascii_lowercase().as_str(), "rgb" | "rgba") {
+                        ctx.diag.warn(
+                            c.loc_of("pixel_format"),
+                            format!("pixel_format '{f}' is not supported: the image is RGB"),
+                        );
+                    }
+                }
+                // Output encoding and options without effect on a linear RGB film.
+                for name in [
+                    "crop_offset_x",
+                    "crop_offset_y",
+                    "crop_width",
+                    "crop_height",
+                    "pixel_format",
+                    "component_format",
+                    "file_format",
+                    "banner",
+                    "compensate",
+                    "sample_border",
+                ] {
+                    c.ignore(name);
+                }
+                let mut saw_filter = false;
+                for f in &c.children {
+                    let fo = ctx.target(f)?;
+                    if fo.tag != "rfilter" {
+                        continue;
+                    }
+                    f.take();
+                    saw_filter = true;
+                    rfilter(ctx, fo)?;
+                }
+                if !saw_filter {
+                    ctx.diag.warn(
+                        &c.loc,
+                        "film has no rfilter (Mitsuba's default is gaussian); the renderer uses box",
+                    );
+                }
+                if !quiet {
+                    c.finish(&mut ctx.diag)?;
+                }
+            }
+            "sampler" => {
+                child.take();
+                match c.plugin.as_str() {
+                    "independent" => {}
+                    "stratified" | "multijitter" | "orthogonal" | "ldsampler" => {
+                        ctx.diag.warn(
+                            &c.loc,
+                            format!("sampler '{}' replaced by independent (the same expected image, different noise)", c.plugin),
+                        );
+                        c.ignore("jitter");
+                        c.ignore("strength");
+                    }
+                    other => ctx.diag.unsupported(
+                        &c.loc,
+                        plugins::describe("sampler", other),
+                        "replaced by independent",
+                    )?,
+                }
+                if let Some(n) = c.integer("sample_count")? {
                     spp = u32::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
-                        ctx.err(
-                            c.node_of("sample_count"),
-                            ErrorKind::Syntax,
-                            "sample_count must be positive",
-                        )
+                        syntax(c.loc_of("sample_count"), "sample_count must be positive")
                     })?;
                 }
-                let _ = c.integer(ctx, "seed")?;
-                c.warn_unused(ctx);
+                let _ = c.integer("seed")?;
+                if !quiet {
+                    c.finish(&mut ctx.diag)?;
+                }
             }
-            other => ctx.warn(c.node, format!("<{other}> inside a sensor ignored")),
+            "medium" => {
+                child.take();
+                ctx.diag.unsupported(
+                    &c.loc,
+                    "a medium around the sensor is not supported by the renderer",
+                    "ignored",
+                )?;
+            }
+            _ => {}
         }
     }
     if !saw_film {
-        ctx.warn(
-            obj.node,
+        ctx.diag.warn(
+            &obj.loc,
             "sensor has no film; Mitsuba's default 768 x 576 is used",
         );
     }
-    obj.warn_unused(ctx);
-    Ok((
-        Camera {
-            to_world,
-            fov,
-            fov_axis,
-            width,
-            height,
-            near_clip,
-            far_clip,
-        },
-        spp,
-    ))
+    Ok((width, height, spp))
 }
 
-fn parse_integrator(ctx: &mut Ctx, obj: &Obj) -> Result<Integrator, SceneError> {
-    if obj.plugin != "path" {
-        ctx.warn(
-            obj.node,
-            format!(
-                "integrator '{}' is not supported; the renderer is a path tracer",
-                obj.plugin
-            ),
-        );
-        return Ok(Integrator::default());
+fn rfilter(ctx: &mut Ctx, f: &Obj) -> Result<(), SceneError> {
+    match f.plugin.as_str() {
+        "box" => {}
+        "gaussian" | "tent" | "lanczos" | "mitchell" | "catmullrom" => {
+            ctx.diag.warn(
+                &f.loc,
+                format!(
+                    "rfilter '{}' replaced by box (the renderer splats each sample into its own pixel)",
+                    f.plugin
+                ),
+            );
+            for name in ["stddev", "radius", "lobes", "B", "C"] {
+                f.ignore(name);
+            }
+        }
+        other => {
+            return ctx.diag.unsupported(
+                &f.loc,
+                plugins::describe("rfilter", other),
+                "replaced by box",
+            )
+        }
+    }
+    f.finish(&mut ctx.diag)
+}
+
+/// The integrator the renderer follows: `path` (and what renders the same image as `path`), or
+/// the first nested integrator of `aov` and `moment`.
+fn parse_integrator<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Integrator, SceneError> {
+    match obj.plugin.as_str() {
+        "path" => {}
+        "volpath" | "volpathmis" | "prb" | "prb_basic" | "prbvolpath" | "prb_projective" => {
+            ctx.diag.warn(
+                &obj.loc,
+                format!(
+                    "integrator '{}' read as 'path' (the same image without participating media)",
+                    obj.plugin
+                ),
+            );
+        }
+        "ptracer" => {
+            ctx.diag.warn(
+                &obj.loc,
+                "integrator 'ptracer' (light tracing) read as 'path' (the same expected image)",
+            );
+            obj.ignore("samples_per_pass");
+        }
+        "aov" | "moment" => {
+            obj.ignore("aovs");
+            let mut inner = None;
+            for c in &obj.children {
+                let t = ctx.target(c)?;
+                if t.tag == "integrator" {
+                    c.take();
+                    if inner.is_none() {
+                        inner = Some(parse_integrator(ctx, t)?);
+                    } else {
+                        ctx.diag
+                            .warn(&c.loc, "only the first nested integrator is rendered");
+                    }
+                }
+            }
+            obj.finish(&mut ctx.diag)?;
+            return match inner {
+                Some(i) => {
+                    ctx.diag.warn(
+                        &obj.loc,
+                        format!(
+                            "integrator '{}': its extra channels are not written; the nested integrator renders the image",
+                            obj.plugin
+                        ),
+                    );
+                    Ok(i)
+                }
+                None => {
+                    ctx.diag.unsupported(
+                        &obj.loc,
+                        format!("integrator '{}' without a nested integrator", obj.plugin),
+                        "'path' used",
+                    )?;
+                    Ok(Integrator::default())
+                }
+            };
+        }
+        "direct" | "direct_projective" => {
+            ctx.diag.unsupported(
+                &obj.loc,
+                plugins::describe("integrator", &obj.plugin),
+                "'path' with max_depth 2 (direct illumination) used",
+            )?;
+            for name in ["emitter_samples", "bsdf_samples", "shading_samples"] {
+                obj.ignore(name);
+            }
+            return Ok(Integrator {
+                max_depth: 2,
+                hide_emitters: obj.boolean("hide_emitters")?.unwrap_or(false),
+                ..Integrator::default()
+            });
+        }
+        other => {
+            ctx.diag.unsupported(
+                &obj.loc,
+                plugins::describe("integrator", other),
+                "'path' with Mitsuba's defaults used",
+            )?;
+            return Ok(Integrator::default());
+        }
     }
     let defaults = Integrator::default();
-    let int = |ctx: &Ctx, name: &str, default: i32| -> Result<i32, SceneError> {
-        match obj.integer(ctx, name)? {
-            None => Ok(default),
-            Some(v) => i32::try_from(v).ok().filter(|&v| v >= -1).ok_or_else(|| {
-                ctx.err(
-                    obj.node_of(name),
-                    ErrorKind::Syntax,
-                    format!("{name} must be >= -1"),
-                )
-            }),
-        }
+    let max_depth = match obj.integer("max_depth")? {
+        None => defaults.max_depth,
+        Some(v) => i32::try_from(v).ok().filter(|&v| v >= -1).ok_or_else(|| {
+            syntax(
+                obj.loc_of("max_depth"),
+                "max_depth must be -1 (unlimited) or >= 0",
+            )
+        })?,
     };
-    let integrator = Integrator {
-        max_depth: int(ctx, "max_depth", defaults.max_depth)?,
-        rr_depth: int(ctx, "rr_depth", defaults.rr_depth)?,
+    let rr_depth = match obj.integer("rr_depth")? {
+        None => defaults.rr_depth,
+        Some(v) => i32::try_from(v)
+            .ok()
+            .filter(|&v| v > 0)
+            .ok_or_else(|| syntax(obj.loc_of("rr_depth"), "rr_depth must be > 0"))?,
     };
-    if obj.boolean(ctx, "hide_emitters")? == Some(true) {
-        ctx.warn(
-            obj.node_of("hide_emitters"),
-            "hide_emitters is not supported: emitters stay visible",
+    let hide_emitters = obj.boolean("hide_emitters")?.unwrap_or(false);
+    if hide_emitters {
+        ctx.diag.warn(
+            obj.loc_of("hide_emitters"),
+            "hide_emitters is not supported by the renderer yet: emitters stay visible",
         );
     }
-    for child in &obj.children {
-        if let Child::Object(o) = child {
-            ctx.warn(o.node, format!("<{}> inside the integrator ignored", o.tag));
-        }
-    }
-    obj.warn_unused(ctx);
-    Ok(integrator)
+    obj.finish(&mut ctx.diag)?;
+    Ok(Integrator {
+        max_depth,
+        rr_depth,
+        hide_emitters,
+    })
 }

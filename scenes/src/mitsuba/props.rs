@@ -1,141 +1,19 @@
-//! First stage of the Mitsuba loader: XML elements → typed objects with properties, each remembering
-//! its line. The plugin stage (`plugins.rs`) then asks for properties by name and type; whatever it
-//! never asks for is reported as ignored, so an unsupported parameter is a warning with a line
-//! instead of a silent difference from Mitsuba's image.
+//! Second stage of the Mitsuba loader: the element tree (`xml.rs`) → plugin objects with typed
+//! properties, nested objects and `<ref>`s, each remembering its file and line. The plugin stage
+//! then asks for properties by name and type; whatever it never asks for is reported, as Mitsuba
+//! reports "unreferenced properties" (an error, or a warning under `--lenient`), so a misspelt or
+//! unsupported parameter never silently changes the image.
 
 use std::cell::Cell;
-use std::collections::HashMap;
-use std::path::PathBuf;
+use std::collections::{HashMap, HashSet};
 
 use glam::{Mat4, Vec3};
-use roxmltree::Node;
 
-use crate::error::{ErrorKind, Location, SceneError, Warning};
+use crate::error::{ErrorKind, Location, SceneError};
 
+use super::diag::{err, syntax, Diag};
 use super::transform::parse_transform;
-
-/// Loader state shared by all stages: where we are, `$parameters`, collected warnings.
-pub(crate) struct Ctx<'a, 'input> {
-    pub file: PathBuf,
-    pub base_dir: PathBuf,
-    pub doc: &'a roxmltree::Document<'input>,
-    pub params: HashMap<String, String>,
-    pub warnings: Vec<Warning>,
-}
-
-impl Ctx<'_, '_> {
-    pub fn line(&self, node: Node) -> u32 {
-        self.doc.text_pos_at(node.range().start).row
-    }
-
-    pub fn loc(&self, node: Node) -> Location {
-        Location::line(&self.file, self.line(node))
-    }
-
-    pub fn err(&self, node: Node, kind: ErrorKind, msg: impl Into<String>) -> SceneError {
-        SceneError::new(kind, self.loc(node), msg)
-    }
-
-    pub fn warn(&mut self, node: Node, msg: impl Into<String>) {
-        let w = Warning::new(self.loc(node), msg);
-        self.warnings.push(w);
-    }
-
-    /// Attribute value with `$name` parameters substituted.
-    pub fn attr(&self, node: Node, name: &str) -> Result<Option<String>, SceneError> {
-        node.attribute(name)
-            .map(|v| self.substitute(node, v))
-            .transpose()
-    }
-
-    pub fn req_attr(&self, node: Node, name: &str) -> Result<String, SceneError> {
-        self.attr(node, name)?.ok_or_else(|| {
-            self.err(
-                node,
-                ErrorKind::Syntax,
-                format!("<{}> needs a '{name}' attribute", node.tag_name().name()),
-            )
-        })
-    }
-
-    fn substitute(&self, node: Node, value: &str) -> Result<String, SceneError> {
-        if !value.contains('$') {
-            return Ok(value.to_string());
-        }
-        let mut out = String::new();
-        let mut rest = value;
-        while let Some(i) = rest.find('$') {
-            out.push_str(&rest[..i]);
-            let after = &rest[i + 1..];
-            let len = after
-                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-                .unwrap_or(after.len());
-            let name = &after[..len];
-            match self.params.get(name) {
-                Some(v) if !name.is_empty() => out.push_str(v),
-                _ => {
-                    return Err(self.err(
-                        node,
-                        ErrorKind::Syntax,
-                        format!(
-                            "undefined parameter '${name}' (no <default name=\"{name}\" .../>)"
-                        ),
-                    ))
-                }
-            }
-            rest = &after[len..];
-        }
-        out.push_str(rest);
-        Ok(out)
-    }
-
-    pub fn number(&self, node: Node, text: &str) -> Result<f64, SceneError> {
-        text.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                self.err(
-                    node,
-                    ErrorKind::Syntax,
-                    format!("'{text}' is not a finite number"),
-                )
-            })
-    }
-
-    /// Numbers separated by commas and/or whitespace.
-    pub fn numbers(&self, node: Node, text: &str) -> Result<Vec<f64>, SceneError> {
-        text.split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|s| !s.is_empty())
-            .map(|s| self.number(node, s))
-            .collect()
-    }
-
-    pub fn vec3_text(&self, node: Node, text: &str) -> Result<Vec3, SceneError> {
-        match self.numbers(node, text)?.as_slice() {
-            [x, y, z] => Ok(Vec3::new(*x as f32, *y as f32, *z as f32)),
-            _ => Err(self.err(
-                node,
-                ErrorKind::Syntax,
-                format!("expected 3 numbers, got '{text}'"),
-            )),
-        }
-    }
-
-    /// A vector given either as `value="x, y, z"` or as x/y/z attributes (missing ones = `default`).
-    pub fn vec3_attrs(&self, node: Node, default: f32) -> Result<Vec3, SceneError> {
-        if let Some(v) = self.attr(node, "value")? {
-            return self.vec3_text(node, &v);
-        }
-        let mut out = Vec3::splat(default);
-        for (k, a) in ["x", "y", "z"].iter().enumerate() {
-            if let Some(v) = self.attr(node, a)? {
-                out[k] = self.number(node, &v)? as f32;
-            }
-        }
-        Ok(out)
-    }
-}
+use super::xml::{check_attrs, Elem};
 
 #[derive(Clone, Debug)]
 pub(crate) enum Value {
@@ -162,30 +40,56 @@ impl Value {
     }
 }
 
-pub(crate) struct Prop<'a, 'input> {
+pub(crate) struct Prop {
     pub name: String,
     pub value: Value,
-    pub node: Node<'a, 'input>,
+    pub loc: Location,
     used: Cell<bool>,
 }
 
-pub(crate) enum Child<'a, 'input> {
-    Object(Obj<'a, 'input>),
-    /// `<ref id="..."/>`, resolved by the plugin stage.
-    Ref {
-        id: String,
-        node: Node<'a, 'input>,
-    },
+pub(crate) enum Kind {
+    Object(Obj),
+    /// `<ref id="..."/>`: resolved through [`Ids`].
+    Ref(String),
 }
 
-/// A plugin element (`<bsdf type="diffuse">`, `<shape type="obj">`...) with its properties.
-pub(crate) struct Obj<'a, 'input> {
+/// A nested object or reference, with its optional `name` (`<ref name="reflectance" id="tex"/>`).
+pub(crate) struct Child {
+    pub name: Option<String>,
+    pub kind: Kind,
+    pub loc: Location,
+    used: Cell<bool>,
+}
+
+impl Child {
+    /// Marks the child as consumed by the plugin code.
+    pub fn take(&self) {
+        self.used.set(true);
+    }
+
+    fn describe(&self) -> String {
+        match &self.kind {
+            Kind::Object(o) => format!("<{} type=\"{}\">", o.tag, o.plugin),
+            Kind::Ref(id) => format!("<ref id=\"{id}\">"),
+        }
+    }
+}
+
+/// A plugin element (`<bsdf type="diffuse">`, `<shape type="obj">`...) or the `<scene>` itself.
+pub(crate) struct Obj {
     pub tag: String,
     pub plugin: String,
     pub id: Option<String>,
-    pub node: Node<'a, 'input>,
-    pub props: Vec<Prop<'a, 'input>>,
-    pub children: Vec<Child<'a, 'input>>,
+    pub loc: Location,
+    pub props: Vec<Prop>,
+    pub children: Vec<Child>,
+}
+
+/// `<alias id="a" as="b"/>`: `b` names the object `a`.
+pub(crate) struct Alias {
+    id: String,
+    alias: String,
+    loc: Location,
 }
 
 const OBJECT_TAGS: &[&str] = &[
@@ -201,129 +105,288 @@ const OBJECT_TAGS: &[&str] = &[
     "medium",
     "phase",
     "volume",
-    "spectrum_plugin",
+    "field",
 ];
 
-pub(crate) fn is_object_tag(tag: &str) -> bool {
-    OBJECT_TAGS.contains(&tag)
-}
+const PROPERTY_TAGS: &[&str] = &[
+    "float",
+    "integer",
+    "boolean",
+    "string",
+    "rgb",
+    "spectrum",
+    "point",
+    "vector",
+    "transform",
+];
 
-pub(crate) fn parse_object<'a, 'input>(
-    ctx: &mut Ctx<'a, 'input>,
-    node: Node<'a, 'input>,
-) -> Result<Obj<'a, 'input>, SceneError> {
-    let tag = node.tag_name().name().to_string();
-    let plugin = ctx.req_attr(node, "type")?;
-    let id = ctx.attr(node, "id")?;
-    let mut obj = Obj {
-        tag,
-        plugin,
-        id,
-        node,
+/// The `<scene>` root as an object whose children are the top-level objects.
+pub(crate) fn parse_scene(diag: &mut Diag, root: &Elem) -> Result<(Obj, Vec<Alias>), SceneError> {
+    check_attrs(
+        diag,
+        &root.loc,
+        "scene",
+        &root.attrs,
+        &["type", "id", "name"],
+    )?;
+    let mut aliases = Vec::new();
+    let mut scene = Obj {
+        tag: "scene".into(),
+        plugin: "scene".into(),
+        id: root.attr("id").map(str::to_string),
+        loc: root.loc.clone(),
         props: Vec::new(),
         children: Vec::new(),
     };
-    for child in node.children().filter(Node::is_element) {
-        let tag = child.tag_name().name();
-        if is_object_tag(tag) {
-            obj.children.push(Child::Object(parse_object(ctx, child)?));
-            continue;
-        }
-        if tag == "ref" {
-            let id = ctx.req_attr(child, "id")?;
-            obj.children.push(Child::Ref { id, node: child });
-            continue;
-        }
-        let value = match tag {
-            "float" => Value::Float(ctx.number(child, &ctx.req_attr(child, "value")?)?),
-            "integer" => {
-                let v = ctx.req_attr(child, "value")?;
-                Value::Integer(v.trim().parse().map_err(|_| {
-                    ctx.err(child, ErrorKind::Syntax, format!("'{v}' is not an integer"))
-                })?)
-            }
-            "boolean" => {
-                let v = ctx.req_attr(child, "value")?;
-                Value::Boolean(match v.trim().to_ascii_lowercase().as_str() {
-                    "true" => true,
-                    "false" => false,
-                    _ => {
-                        return Err(ctx.err(
-                            child,
-                            ErrorKind::Syntax,
-                            format!("'{v}' is not a boolean (true/false)"),
-                        ))
-                    }
-                })
-            }
-            "string" => Value::String(ctx.req_attr(child, "value")?),
-            "rgb" => Value::Color(parse_rgb(ctx, child)?),
-            "spectrum" => Value::Color(parse_spectrum(ctx, child)?),
-            "point" | "vector" => Value::Vector(ctx.vec3_attrs(child, 0.0)?),
-            "transform" => Value::Transform(parse_transform(ctx, child)?),
-            other => {
-                ctx.warn(
-                    child,
-                    format!("unknown element <{other}> inside <{}> ignored", obj.tag),
-                );
-                continue;
-            }
-        };
-        let name = ctx.req_attr(child, "name")?;
-        if obj.props.iter().any(|p| p.name == name) {
-            ctx.warn(
-                child,
-                format!("property '{name}' given twice; the last one is used"),
-            );
-            obj.props.retain(|p| p.name != name);
-        }
-        obj.props.push(Prop {
-            name,
-            value,
-            node: child,
-            used: Cell::new(false),
-        });
-    }
+    fill(diag, &mut scene, root, &mut aliases)?;
+    Ok((scene, aliases))
+}
+
+fn parse_object(diag: &mut Diag, e: &Elem, aliases: &mut Vec<Alias>) -> Result<Obj, SceneError> {
+    check_attrs(diag, &e.loc, &e.tag, &e.attrs, &["!type", "id", "name"])?;
+    let mut obj = Obj {
+        // `<spectrum type="...">` is a texture plugin in Mitsuba 3.
+        tag: if e.tag == "spectrum" {
+            "texture".into()
+        } else {
+            e.tag.clone()
+        },
+        plugin: e.attr("type").unwrap_or_default().to_string(),
+        id: e.attr("id").map(str::to_string),
+        loc: e.loc.clone(),
+        props: Vec::new(),
+        children: Vec::new(),
+    };
+    fill(diag, &mut obj, e, aliases)?;
     Ok(obj)
 }
 
+fn fill(
+    diag: &mut Diag,
+    obj: &mut Obj,
+    e: &Elem,
+    aliases: &mut Vec<Alias>,
+) -> Result<(), SceneError> {
+    for c in &e.children {
+        let tag = c.tag.as_str();
+        let name = c.attr("name").map(str::to_string);
+        if OBJECT_TAGS.contains(&tag) || (tag == "spectrum" && c.attr("type").is_some()) {
+            let o = parse_object(diag, c, aliases)?;
+            obj.children.push(Child {
+                name,
+                kind: Kind::Object(o),
+                loc: c.loc.clone(),
+                used: Cell::new(false),
+            });
+            continue;
+        }
+        if PROPERTY_TAGS.contains(&tag) {
+            let value = parse_value(diag, c)?;
+            let name = name.unwrap_or_default();
+            if obj.props.iter().any(|p| p.name == name) {
+                diag.unsupported(
+                    &c.loc,
+                    format!("property '{name}' is given twice (Mitsuba rejects this)"),
+                    "the last one is used",
+                )?;
+                obj.props.retain(|p| p.name != name);
+            }
+            obj.props.push(Prop {
+                name,
+                value,
+                loc: c.loc.clone(),
+                used: Cell::new(false),
+            });
+            continue;
+        }
+        match tag {
+            "ref" => {
+                check_attrs(diag, &c.loc, tag, &c.attrs, &["!id", "name"])?;
+                obj.children.push(Child {
+                    name,
+                    kind: Kind::Ref(c.attr("id").unwrap_or_default().to_string()),
+                    loc: c.loc.clone(),
+                    used: Cell::new(false),
+                });
+            }
+            "alias" => {
+                check_attrs(diag, &c.loc, tag, &c.attrs, &["!id", "!as"])?;
+                aliases.push(Alias {
+                    id: c.attr("id").unwrap_or_default().to_string(),
+                    alias: c.attr("as").unwrap_or_default().to_string(),
+                    loc: c.loc.clone(),
+                });
+            }
+            "translate" | "rotate" | "scale" | "lookat" | "matrix" => {
+                return Err(syntax(
+                    &c.loc,
+                    format!("<{tag}> can only appear inside a <transform>"),
+                ))
+            }
+            other => diag.unsupported(
+                &c.loc,
+                format!("unknown element <{other}> inside <{}>", obj.tag),
+                "ignored",
+            )?,
+        }
+    }
+    Ok(())
+}
+
+fn parse_value(diag: &mut Diag, c: &Elem) -> Result<Value, SceneError> {
+    let tag = c.tag.as_str();
+    let allowed: &[&str] = match tag {
+        "spectrum" => &["!name", "value", "filename"],
+        "point" | "vector" => &["!name", "value", "x", "y", "z"],
+        "transform" => &["!name"],
+        _ => &["!name", "!value"],
+    };
+    check_attrs(diag, &c.loc, tag, &c.attrs, allowed)?;
+    if tag != "transform" && !c.children.is_empty() {
+        diag.unsupported(
+            &c.loc,
+            format!("<{tag}> cannot have child elements"),
+            "they are ignored",
+        )?;
+    }
+    let loc = &c.loc;
+    let value = || c.attr("value").unwrap_or_default();
+    Ok(match tag {
+        "float" => Value::Float(number(loc, value())?),
+        "integer" => Value::Integer(
+            value()
+                .trim()
+                .parse()
+                .map_err(|_| syntax(loc, format!("'{}' is not an integer", value())))?,
+        ),
+        "boolean" => Value::Boolean(match value().trim().to_ascii_lowercase().as_str() {
+            "true" => true,
+            "false" => false,
+            _ => {
+                return Err(syntax(
+                    loc,
+                    format!("'{}' is not a boolean (true/false)", value()),
+                ))
+            }
+        }),
+        "string" => Value::String(value().to_string()),
+        "rgb" => Value::Color(rgb(loc, value())?),
+        "spectrum" => match (c.attr("value"), c.attr("filename")) {
+            (Some(v), None) => Value::Color(spectrum(diag, loc, v)?),
+            (None, Some(f)) => {
+                diag.unsupported(
+                    loc,
+                    format!("spectrum file '{f}' is not supported (the renderer is RGB)"),
+                    "replaced by grey 0.5",
+                )?;
+                Value::Color(Vec3::splat(0.5))
+            }
+            _ => {
+                return Err(syntax(
+                    loc,
+                    "<spectrum> needs either a 'value' or a 'filename' attribute",
+                ))
+            }
+        },
+        "point" | "vector" => Value::Vector(xyz(c, None)?),
+        _ => Value::Transform(parse_transform(diag, c)?),
+    })
+}
+
+pub(crate) fn number(loc: &Location, text: &str) -> Result<f64, SceneError> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| syntax(loc, format!("'{text}' is not a finite number")))
+}
+
+/// Numbers separated by commas and/or whitespace.
+pub(crate) fn numbers(loc: &Location, text: &str) -> Result<Vec<f64>, SceneError> {
+    text.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .map(|s| number(loc, s))
+        .collect()
+}
+
+pub(crate) fn vec3_text(loc: &Location, text: &str) -> Result<Vec3, SceneError> {
+    match numbers(loc, text)?.as_slice() {
+        [x, y, z] => Ok(Vec3::new(*x as f32, *y as f32, *z as f32)),
+        _ => Err(syntax(loc, format!("expected 3 numbers, got '{text}'"))),
+    }
+}
+
+/// A vector given as `value` (1 number for all three components, or 3) or as `x`/`y`/`z`, as
+/// Mitsuba reads points, vectors and transform steps. `default` is the value of a missing
+/// component; `None` makes all three required (points and vectors).
+pub(crate) fn xyz(e: &Elem, default: Option<f32>) -> Result<Vec3, SceneError> {
+    let loc = &e.loc;
+    let has_xyz = ["x", "y", "z"].iter().any(|a| e.attr(a).is_some());
+    if let Some(v) = e.attr("value") {
+        if has_xyz {
+            return Err(syntax(loc, "cannot mix 'value' and 'x'/'y'/'z' attributes"));
+        }
+        return match numbers(loc, v)?.as_slice() {
+            [s] => Ok(Vec3::splat(*s as f32)),
+            [x, y, z] => Ok(Vec3::new(*x as f32, *y as f32, *z as f32)),
+            _ => Err(syntax(
+                loc,
+                format!("'value' needs 1 or 3 numbers, got '{v}'"),
+            )),
+        };
+    }
+    let mut out = Vec3::ZERO;
+    for (k, a) in ["x", "y", "z"].iter().enumerate() {
+        out[k] = match (e.attr(a), default) {
+            (Some(v), _) => number(loc, v)? as f32,
+            (None, Some(d)) => d,
+            (None, None) => {
+                return Err(syntax(
+                    loc,
+                    format!("<{}> needs x, y and z (or value)", e.tag),
+                ))
+            }
+        };
+    }
+    Ok(out)
+}
+
 /// `"r, g, b"` or a single grey value.
-fn parse_rgb(ctx: &Ctx, node: Node) -> Result<Vec3, SceneError> {
-    let text = ctx.req_attr(node, "value")?;
-    match ctx.numbers(node, &text)?.as_slice() {
+fn rgb(loc: &Location, text: &str) -> Result<Vec3, SceneError> {
+    match numbers(loc, text)?.as_slice() {
         [v] => Ok(Vec3::splat(*v as f32)),
         [r, g, b] => Ok(Vec3::new(*r as f32, *g as f32, *b as f32)),
-        _ => Err(ctx.err(
-            node,
-            ErrorKind::Syntax,
+        _ => Err(syntax(
+            loc,
             format!("rgb value '{text}' needs 1 or 3 numbers"),
         )),
     }
 }
 
-/// A constant `<spectrum value="0.5"/>` is grey; a sampled one ("400:0.1, 500:0.2, ...") is
+/// A constant `<spectrum value="0.5"/>` is grey (three numbers are not a spectrum); a sampled one ("400:0.1, 500:0.2, ...") is
 /// approximated by its mean, with a warning, since the renderer is RGB.
-fn parse_spectrum(ctx: &mut Ctx, node: Node) -> Result<Vec3, SceneError> {
-    let text = ctx.req_attr(node, "value")?;
+fn spectrum(diag: &mut Diag, loc: &Location, text: &str) -> Result<Vec3, SceneError> {
     if !text.contains(':') {
-        return parse_rgb(ctx, node);
+        return match numbers(loc, text)?.as_slice() {
+            [v] => Ok(Vec3::splat(*v as f32)),
+            _ => Err(syntax(
+                loc,
+                format!("spectrum value '{text}' is neither one number nor wavelength:value pairs"),
+            )),
+        };
     }
     let mut values = Vec::new();
     for pair in text.split(',').filter(|s| !s.trim().is_empty()) {
         let Some((_, v)) = pair.split_once(':') else {
-            return Err(ctx.err(
-                node,
-                ErrorKind::Syntax,
-                format!("bad spectrum entry '{pair}'"),
-            ));
+            return Err(syntax(loc, format!("bad spectrum entry '{pair}'")));
         };
-        values.push(ctx.number(node, v)?);
+        values.push(number(loc, v)?);
     }
     if values.is_empty() {
-        return Err(ctx.err(node, ErrorKind::Syntax, "empty spectrum"));
+        return Err(syntax(loc, "empty spectrum"));
     }
-    ctx.warn(
-        node,
+    diag.warn(
+        loc,
         "sampled spectrum approximated by its mean value (grey)",
     );
     Ok(Vec3::splat(
@@ -331,8 +394,8 @@ fn parse_spectrum(ctx: &mut Ctx, node: Node) -> Result<Vec3, SceneError> {
     ))
 }
 
-impl<'a, 'input> Obj<'a, 'input> {
-    fn prop(&self, name: &str) -> Option<&Prop<'a, 'input>> {
+impl Obj {
+    fn prop(&self, name: &str) -> Option<&Prop> {
         let p = self.props.iter().find(|p| p.name == name)?;
         p.used.set(true);
         Some(p)
@@ -340,12 +403,38 @@ impl<'a, 'input> Obj<'a, 'input> {
 
     pub fn has(&self, name: &str) -> bool {
         self.props.iter().any(|p| p.name == name)
+            || self
+                .children
+                .iter()
+                .any(|c| c.name.as_deref() == Some(name))
     }
 
-    fn mismatch(&self, ctx: &Ctx, p: &Prop, wanted: &str) -> SceneError {
-        ctx.err(
-            p.node,
-            ErrorKind::Syntax,
+    /// Marks parameter `name` (property or named child) as read without using it: a Mitsuba
+    /// parameter with no effect on this renderer's image.
+    pub fn ignore(&self, name: &str) {
+        let _ = self.prop(name);
+        for c in self
+            .children
+            .iter()
+            .filter(|c| c.name.as_deref() == Some(name))
+        {
+            c.take();
+        }
+    }
+
+    /// The nested object or reference called `name`, marked as read.
+    pub fn child_named(&self, name: &str) -> Option<&Child> {
+        let c = self
+            .children
+            .iter()
+            .find(|c| c.name.as_deref() == Some(name))?;
+        c.take();
+        Some(c)
+    }
+
+    fn mismatch(&self, p: &Prop, wanted: &str) -> SceneError {
+        syntax(
+            &p.loc,
             format!(
                 "property '{}' of {} '{}' must be {wanted}, found {}",
                 p.name,
@@ -356,99 +445,220 @@ impl<'a, 'input> Obj<'a, 'input> {
         )
     }
 
-    pub fn float(&self, ctx: &Ctx, name: &str) -> Result<Option<f32>, SceneError> {
+    pub fn float(&self, name: &str) -> Result<Option<f32>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Float(v) => Ok(Some(v as f32)),
             Value::Integer(v) => Ok(Some(v as f32)),
-            _ => Err(self.mismatch(ctx, p, "a float")),
+            _ => Err(self.mismatch(p, "a float")),
         }
     }
 
-    pub fn integer(&self, ctx: &Ctx, name: &str) -> Result<Option<i64>, SceneError> {
+    pub fn integer(&self, name: &str) -> Result<Option<i64>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Integer(v) => Ok(Some(v)),
-            _ => Err(self.mismatch(ctx, p, "an integer")),
+            _ => Err(self.mismatch(p, "an integer")),
         }
     }
 
-    pub fn boolean(&self, ctx: &Ctx, name: &str) -> Result<Option<bool>, SceneError> {
+    pub fn boolean(&self, name: &str) -> Result<Option<bool>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Boolean(v) => Ok(Some(v)),
-            _ => Err(self.mismatch(ctx, p, "a boolean")),
+            _ => Err(self.mismatch(p, "a boolean")),
         }
     }
 
-    pub fn string(&self, ctx: &Ctx, name: &str) -> Result<Option<String>, SceneError> {
+    pub fn string(&self, name: &str) -> Result<Option<String>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match &p.value {
             Value::String(v) => Ok(Some(v.clone())),
-            _ => Err(self.mismatch(ctx, p, "a string")),
+            _ => Err(self.mismatch(p, "a string")),
         }
     }
 
-    /// Colours accept `<rgb>`, `<spectrum>` and, as Mitsuba does, a plain `<float>` (grey).
-    pub fn color(&self, ctx: &Ctx, name: &str) -> Result<Option<Vec3>, SceneError> {
+    /// A float or a named constant (Mitsuba's IORs accept both).
+    pub fn float_or_string(&self, name: &str) -> Result<Option<Result<f32, String>>, SceneError> {
+        let Some(p) = self.prop(name) else {
+            return Ok(None);
+        };
+        match &p.value {
+            Value::Float(v) => Ok(Some(Ok(*v as f32))),
+            Value::Integer(v) => Ok(Some(Ok(*v as f32))),
+            Value::String(s) => Ok(Some(Err(s.clone()))),
+            _ => Err(self.mismatch(p, "a float or a name")),
+        }
+    }
+
+    /// Colours accept `<rgb>`, `<spectrum>` and, as Mitsuba does, `<float>`/`<integer>` (grey).
+    /// Textures given as nested objects or references are read by `Ctx::color`.
+    pub fn color(&self, name: &str) -> Result<Option<Vec3>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Color(v) => Ok(Some(v)),
             Value::Float(v) => Ok(Some(Vec3::splat(v as f32))),
-            _ => Err(self.mismatch(ctx, p, "a colour (rgb, spectrum or float)")),
+            Value::Integer(v) => Ok(Some(Vec3::splat(v as f32))),
+            _ => Err(self.mismatch(p, "a colour (rgb, spectrum or float)")),
         }
     }
 
-    pub fn vector(&self, ctx: &Ctx, name: &str) -> Result<Option<Vec3>, SceneError> {
+    pub fn vector(&self, name: &str) -> Result<Option<Vec3>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Vector(v) => Ok(Some(v)),
-            _ => Err(self.mismatch(ctx, p, "a point")),
+            _ => Err(self.mismatch(p, "a point")),
         }
     }
 
-    pub fn transform(&self, ctx: &Ctx, name: &str) -> Result<Option<Mat4>, SceneError> {
+    pub fn transform(&self, name: &str) -> Result<Option<Mat4>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
         match p.value {
             Value::Transform(m) => Ok(Some(m)),
-            _ => Err(self.mismatch(ctx, p, "a transform")),
+            _ => Err(self.mismatch(p, "a transform")),
         }
     }
 
-    /// The element of property `name`, for errors about its value.
-    pub fn node_of(&self, name: &str) -> Node<'a, 'input> {
+    /// The place of property `name` (or of the object), for errors about its value.
+    pub fn loc_of(&self, name: &str) -> &Location {
         self.props
             .iter()
             .find(|p| p.name == name)
-            .map_or(self.node, |p| p.node)
+            .map_or(&self.loc, |p| &p.loc)
     }
 
-    /// Warns about every property no plugin code asked for.
-    pub fn warn_unused(&self, ctx: &mut Ctx) {
-        for p in &self.props {
-            if !p.used.get() {
-                ctx.warn(
-                    p.node,
-                    format!(
-                        "property '{}' of {} '{}' is not supported and was ignored",
-                        p.name, self.tag, self.plugin
-                    ),
-                );
+    /// Reports every property and nested object that no plugin code read, as Mitsuba reports
+    /// unreferenced properties.
+    pub fn finish(&self, diag: &mut Diag) -> Result<(), SceneError> {
+        let whose = if self.tag == "scene" {
+            "the <scene>".to_string()
+        } else {
+            format!("{} '{}'", self.tag, self.plugin)
+        };
+        for p in self.props.iter().filter(|p| !p.used.get()) {
+            diag.unsupported(
+                &p.loc,
+                format!(
+                    "{whose} has no parameter '{}' (Mitsuba: unreferenced property)",
+                    p.name
+                ),
+                "ignored",
+            )?;
+        }
+        for c in self.children.iter().filter(|c| !c.used.get()) {
+            diag.unsupported(
+                &c.loc,
+                format!("{} inside {whose} is not used there", c.describe()),
+                "ignored",
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Every object with an `id`, wherever it is nested (Mitsuba's ids are global, and a `<ref>` may
+/// come before the object it names).
+pub(crate) type Ids<'a> = HashMap<String, &'a Obj>;
+
+pub(crate) fn index<'a>(scene: &'a Obj, aliases: &[Alias]) -> Result<Ids<'a>, SceneError> {
+    fn walk<'a>(o: &'a Obj, ids: &mut Ids<'a>) -> Result<(), SceneError> {
+        for c in &o.children {
+            if let Kind::Object(child) = &c.kind {
+                if let Some(id) = &child.id {
+                    if let Some(prev) = ids.insert(id.clone(), child) {
+                        return Err(syntax(
+                            &child.loc,
+                            format!("duplicate id '{id}' (first defined at {})", prev.loc),
+                        ));
+                    }
+                }
+                walk(child, ids)?;
             }
         }
+        Ok(())
     }
+    let mut ids = Ids::new();
+    walk(scene, &mut ids)?;
+    for a in aliases {
+        let Some(target) = ids.get(&a.id).copied() else {
+            return Err(syntax(
+                &a.loc,
+                format!("alias source id '{}' not found", a.id),
+            ));
+        };
+        if ids.insert(a.alias.clone(), target).is_some() {
+            return Err(syntax(
+                &a.loc,
+                format!("alias id '{}' is already defined", a.alias),
+            ));
+        }
+    }
+    Ok(ids)
+}
+
+/// Every `<ref>` names an object, and no chain of nested objects and references leads back to
+/// where it started (checked for the whole file, used or not, as Mitsuba does).
+pub(crate) fn check_refs(scene: &Obj, ids: &Ids) -> Result<(), SceneError> {
+    fn visit<'a>(
+        o: &'a Obj,
+        ids: &Ids<'a>,
+        path: &mut Vec<&'a Obj>,
+        done: &mut HashSet<*const Obj>,
+    ) -> Result<(), SceneError> {
+        if done.contains(&(o as *const Obj)) {
+            return Ok(());
+        }
+        if let Some(i) = path.iter().position(|p| std::ptr::eq(*p, o)) {
+            let name = |o: &Obj| {
+                o.id.clone()
+                    .unwrap_or_else(|| format!("<{} type=\"{}\">", o.tag, o.plugin))
+            };
+            let cycle: Vec<String> = path[i..].iter().map(|o| name(o)).chain([name(o)]).collect();
+            return Err(err(
+                &o.loc,
+                ErrorKind::Cycle,
+                format!("circular reference: {}", cycle.join(" -> ")),
+            ));
+        }
+        if path.len() >= super::xml::MAX_NESTING {
+            return Err(syntax(
+                &o.loc,
+                format!(
+                    "objects and references nested deeper than {} levels",
+                    super::xml::MAX_NESTING
+                ),
+            ));
+        }
+        path.push(o);
+        for c in &o.children {
+            let target = match &c.kind {
+                Kind::Object(x) => x,
+                Kind::Ref(id) => *ids.get(id).ok_or_else(|| {
+                    syntax(
+                        &c.loc,
+                        format!("<ref>: no object has id '{id}' (Mitsuba: unresolved reference)"),
+                    )
+                })?,
+            };
+            visit(target, ids, path, done)?;
+        }
+        path.pop();
+        done.insert(o as *const Obj);
+        Ok(())
+    }
+    visit(scene, ids, &mut Vec::new(), &mut HashSet::new())
 }

@@ -1,56 +1,60 @@
 //! Mitsuba `<shape>` plugins → triangles in the [`SceneBuilder`]: mesh files (`obj`, `ply`) and the
-//! analytic shapes (`rectangle`, `cube`, `sphere` tessellated, see [`crate::shapes`]), each with its
-//! BSDF and optional `area` emitter folded into one [`Material`].
+//! analytic shapes (`rectangle`, `cube`, and `sphere`, `disk`, `cylinder` tessellated, see
+//! [`crate::shapes`]), each with its BSDF and optional `area` emitter folded into one [`Material`].
 
-use glam::{Mat4, Vec3};
+use std::path::Path;
+
+use glam::{Mat4, Quat, Vec2, Vec3};
 
 use crate::builder::{SceneBuilder, Shading};
-use crate::error::{ErrorKind, SceneError};
+use crate::error::{ErrorKind, Location, SceneError};
 use crate::material::Material;
+use crate::mesh::TriMesh;
 use crate::shapes;
 
 use super::bsdf::{parse_bsdf, ParsedBsdf, DEFAULT_BSDF};
-use super::props::{Child, Ctx, Obj};
+use super::diag::{err, syntax};
+use super::plugins;
+use super::props::Obj;
+use super::xml::{resolve, show_list};
+use super::Ctx;
 
-pub(crate) fn add_shape(
-    ctx: &mut Ctx,
-    obj: &Obj,
+/// Segments around a tessellated disk or cylinder.
+const ROUND_SEGMENTS: u32 = 128;
+
+pub(crate) fn add_shape<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
     builder: &mut SceneBuilder,
-    bsdfs: &mut Vec<(String, ParsedBsdf)>,
 ) -> Result<(), SceneError> {
     let plugin = obj.plugin.as_str();
-    if !matches!(plugin, "obj" | "ply" | "rectangle" | "cube" | "sphere") {
-        ctx.warn(obj.node, format!("unsupported shape '{plugin}' ignored"));
-        return Ok(());
+    if !matches!(
+        plugin,
+        "obj" | "ply" | "rectangle" | "cube" | "sphere" | "disk" | "cylinder"
+    ) {
+        return ctx
+            .diag
+            .unsupported(&obj.loc, plugins::describe("shape", plugin), "skipped");
     }
-    let to_world = obj.transform(ctx, "to_world")?.unwrap_or(Mat4::IDENTITY);
-    let flip = obj.boolean(ctx, "flip_normals")?.unwrap_or(false);
-    let line = ctx.line(obj.node);
+    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let flip = obj.boolean("flip_normals")?.unwrap_or(false);
 
     let (mut mesh, shading, name) = match plugin {
         "obj" | "ply" => {
-            let face_normals = obj.boolean(ctx, "face_normals")?.unwrap_or(false);
-            let _ = obj.boolean(ctx, "flip_tex_coords")?;
-            let Some(filename) = obj.string(ctx, "filename")? else {
-                return Err(ctx.err(
-                    obj.node,
-                    ErrorKind::Syntax,
+            let face_normals = obj.boolean("face_normals")?.unwrap_or(false);
+            let _ = obj.boolean("flip_tex_coords")?;
+            let Some(filename) = obj.string("filename")? else {
+                return Err(syntax(
+                    &obj.loc,
                     format!("{plugin} shape needs a 'filename'"),
                 ));
             };
-            let path = ctx.base_dir.join(&filename);
-            let outer = ctx.loc(obj.node_of("filename"));
-            if !path.is_file() {
-                return Err(SceneError::new(
-                    ErrorKind::Io,
-                    outer,
-                    format!("mesh file '{}' not found", path.display()),
-                ));
-            }
+            let outer = obj.loc_of("filename").clone();
+            let path = find_mesh(ctx, &filename, &outer)?;
             let mesh = if plugin == "obj" {
                 crate::obj::read_obj(&path)
             } else {
-                crate::ply::read_ply(&path, &mut ctx.warnings)
+                crate::ply::read_ply(&path, &mut ctx.diag.warnings)
             }
             .map_err(|e| e.referenced_from(outer))?;
             let shading = if face_normals {
@@ -62,9 +66,31 @@ pub(crate) fn add_shape(
         }
         "rectangle" => (shapes::rectangle(), Shading::Flat, "rectangle".to_string()),
         "cube" => (shapes::cube(), Shading::Flat, "cube".to_string()),
+        "disk" => (disk(), Shading::Flat, "disk".to_string()),
+        "cylinder" => {
+            let p0 = obj.vector("p0")?.unwrap_or(Vec3::ZERO);
+            let p1 = obj.vector("p1")?.unwrap_or(Vec3::Z);
+            let radius = obj.float("radius")?.unwrap_or(1.0);
+            let axis = p1 - p0;
+            let Some(dir) = axis.try_normalize().filter(|_| radius > 0.0) else {
+                return Err(syntax(
+                    &obj.loc,
+                    "cylinder needs p0 != p1 and a positive radius",
+                ));
+            };
+            // Mitsuba: to_world * translate(p0) * frame(p1 - p0) * scale(r, r, |p1 - p0|).
+            let local = Mat4::from_translation(p0)
+                * Mat4::from_quat(Quat::from_rotation_arc(Vec3::Z, dir))
+                * Mat4::from_scale(Vec3::new(radius, radius, axis.length()));
+            (
+                open_cylinder().transformed(&local),
+                Shading::Smooth,
+                "cylinder".to_string(),
+            )
+        }
         _ => {
-            let center = obj.vector(ctx, "center")?.unwrap_or(Vec3::ZERO);
-            let radius = obj.float(ctx, "radius")?.unwrap_or(1.0);
+            let center = obj.vector("center")?.unwrap_or(Vec3::ZERO);
+            let radius = obj.float("radius")?.unwrap_or(1.0);
             // Mitsuba: to_world * translate(center) * scale(radius).
             let local = Mat4::from_translation(center) * Mat4::from_scale(Vec3::splat(radius));
             let mesh = shapes::icosphere(shapes::SPHERE_SUBDIVISIONS).transformed(&local);
@@ -75,63 +101,102 @@ pub(crate) fn add_shape(
         mesh.flip();
     }
 
-    let mut bsdf = None;
-    let mut emission = None;
-    for child in &obj.children {
-        match child {
-            Child::Object(o) if o.tag == "bsdf" => {
-                let parsed = parse_bsdf(ctx, o, &|id| lookup(bsdfs, id))?;
-                if let Some(id) = &o.id {
-                    bsdfs.push((id.clone(), parsed));
+    let mut bsdf: Option<ParsedBsdf> = None;
+    let mut emission: Option<Vec3> = None;
+    for c in &obj.children {
+        let t = ctx.target(c)?;
+        match (t.tag.as_str(), t.plugin.as_str()) {
+            ("bsdf", _) => {
+                c.take();
+                let parsed = parse_bsdf(ctx, t)?;
+                if bsdf.is_some() {
+                    ctx.diag.unsupported(
+                        &c.loc,
+                        "a second BSDF in one shape (Mitsuba allows one)",
+                        "ignored; the first is used",
+                    )?;
+                } else {
+                    bsdf = Some(parsed);
                 }
-                set_once(ctx, o.node, &mut bsdf, parsed, "bsdf");
             }
-            Child::Ref { id, node } => {
-                let parsed = lookup(bsdfs, id).ok_or_else(|| {
-                    ctx.err(
-                        *node,
-                        ErrorKind::Syntax,
-                        format!("no BSDF with id '{id}' defined before this point"),
-                    )
-                })?;
-                set_once(ctx, *node, &mut bsdf, parsed, "bsdf");
-            }
-            Child::Object(o) if o.tag == "emitter" && o.plugin == "area" => {
-                let radiance = o.color(ctx, "radiance")?.unwrap_or(Vec3::ONE);
+            ("emitter", "area") => {
+                c.take();
+                let key = t as *const Obj as usize;
+                if ctx.attached.contains(&key) {
+                    ctx.diag.unsupported(
+                        &c.loc,
+                        "this area emitter is already attached to another shape (Mitsuba allows one)",
+                        "each shape emits",
+                    )?;
+                }
+                ctx.attached.push(key);
+                let radiance = ctx.color(t, "radiance")?.unwrap_or(Vec3::ONE);
                 if !radiance.is_finite() || radiance.min_element() < 0.0 {
-                    return Err(ctx.err(
-                        o.node_of("radiance"),
-                        ErrorKind::Syntax,
+                    return Err(syntax(
+                        t.loc_of("radiance"),
                         "radiance must be finite and >= 0",
                     ));
                 }
-                o.warn_unused(ctx);
-                set_once(ctx, o.node, &mut emission, radiance, "emitter");
+                t.finish(&mut ctx.diag)?;
+                if emission.is_some() {
+                    ctx.diag.unsupported(
+                        &c.loc,
+                        "a second emitter in one shape (Mitsuba allows one)",
+                        "ignored; the first is used",
+                    )?;
+                } else {
+                    emission = Some(radiance);
+                }
             }
-            Child::Object(o) => {
-                ctx.warn(
-                    o.node,
+            ("emitter", other) => {
+                c.take();
+                ctx.diag.unsupported(
+                    &c.loc,
                     format!(
-                        "<{} type=\"{}\"> inside a shape is not supported and was ignored",
-                        o.tag, o.plugin
+                        "emitter '{other}' inside a shape (only 'area' emitters attach to shapes)"
                     ),
-                );
+                    "ignored",
+                )?;
             }
+            ("medium", _) | ("sensor", _) => {
+                c.take();
+                ctx.diag.unsupported(
+                    &c.loc,
+                    format!(
+                        "<{} type=\"{}\"> attached to a shape is not supported by the renderer",
+                        t.tag, t.plugin
+                    ),
+                    "ignored",
+                )?;
+            }
+            // Anything else is reported as unused by `finish`.
+            _ => {}
         }
     }
-    obj.warn_unused(ctx);
+    obj.finish(&mut ctx.diag)?;
 
-    let ParsedBsdf { bsdf, two_sided } = bsdf.unwrap_or(DEFAULT_BSDF);
+    // Mitsuba's default BSDF is diffuse 0.5, but black on a shape that emits.
+    let ParsedBsdf { bsdf, two_sided } = match (bsdf, emission) {
+        (Some(b), _) => b,
+        (None, Some(_)) => ParsedBsdf {
+            bsdf: crate::material::Bsdf::Diffuse {
+                reflectance: Vec3::ZERO,
+            },
+            two_sided: false,
+        },
+        (None, None) => DEFAULT_BSDF,
+    };
     let material = builder.material(Material {
         bsdf,
         two_sided,
         emission,
     });
+    let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));
     let added = builder.add_mesh(&name, &mesh, &to_world, material, shading);
     if added.dropped_degenerate > 0 {
-        ctx.warn(
-            obj.node,
+        ctx.diag.warn(
+            &obj.loc,
             format!(
                 "{} degenerate (zero-area) triangles of {name} dropped, {} kept",
                 added.dropped_degenerate, added.triangles
@@ -139,21 +204,49 @@ pub(crate) fn add_shape(
         );
     }
     if added.triangles == 0 {
-        ctx.warn(obj.node, format!("{name} has no triangles"));
+        ctx.diag.warn(&obj.loc, format!("{name} has no triangles"));
     }
     Ok(())
 }
 
-fn lookup(bsdfs: &[(String, ParsedBsdf)], id: &str) -> Option<ParsedBsdf> {
-    bsdfs.iter().rev().find(|(i, _)| i == id).map(|(_, b)| *b)
+/// Resolves a mesh file name as Mitsuba does: in the main scene file's `<path>` folders, its
+/// folder, then the working directory.
+fn find_mesh(ctx: &Ctx, filename: &str, at: &Location) -> Result<std::path::PathBuf, SceneError> {
+    if let Some(p) = resolve(&ctx.search, Path::new(filename)) {
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    let mut msg = format!(
+        "mesh file '{filename}' not found (searched in {})",
+        show_list(&ctx.search)
+    );
+    // A shape written in an included file still resolves against the main file's folders.
+    if let Some(dir) = at.file.parent() {
+        let beside = dir.join(filename);
+        if beside.is_file() && !ctx.search.iter().any(|s| s == dir) {
+            msg += &format!(
+                "; note: '{}' exists, but as in Mitsuba, file names in an included file are resolved from the main scene file's folder and <path>s",
+                beside.display()
+            );
+        }
+    }
+    Err(err(at, ErrorKind::Io, msg))
 }
 
-fn set_once<T>(ctx: &mut Ctx, node: roxmltree::Node, slot: &mut Option<T>, value: T, what: &str) {
-    if slot.is_some() {
-        ctx.warn(
-            node,
-            format!("shape has more than one {what}; the last one is used"),
-        );
-    }
-    *slot = Some(value);
+/// Mitsuba `disk`: the unit disk in z = 0, normal +z.
+fn disk() -> TriMesh {
+    lathe_z(&[Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)])
+}
+
+/// Mitsuba `cylinder` before its placement: radius 1 around +z from z = 0 to 1, open ends,
+/// normals outward.
+fn open_cylinder() -> TriMesh {
+    lathe_z(&[Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0)])
+}
+
+/// [`shapes::lathe`] (about +y) turned so that its axis is +z.
+fn lathe_z(profile: &[Vec2]) -> TriMesh {
+    let y_to_z = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
+    shapes::lathe(profile, ROUND_SEGMENTS).transformed(&y_to_z)
 }

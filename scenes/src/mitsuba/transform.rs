@@ -3,88 +3,104 @@
 //! `<scale/><rotate/><translate/>` scales first and translates last.
 
 use glam::{Mat3, Mat4, Vec3};
-use roxmltree::Node;
 
 use crate::camera::look_at_matrix;
-use crate::error::{ErrorKind, SceneError};
+use crate::error::SceneError;
 
-use super::props::Ctx;
+use super::diag::{syntax, Diag};
+use super::props::{number, numbers, vec3_text, xyz};
+use super::xml::{check_attrs, Elem};
 
-pub(crate) fn parse_transform(ctx: &mut Ctx, node: Node) -> Result<Mat4, SceneError> {
+pub(crate) fn parse_transform(diag: &mut Diag, e: &Elem) -> Result<Mat4, SceneError> {
     let mut m = Mat4::IDENTITY;
-    for op in node.children().filter(Node::is_element) {
-        let step = match op.tag_name().name() {
-            "translate" => Mat4::from_translation(ctx.vec3_attrs(op, 0.0)?),
+    for op in &e.children {
+        let loc = &op.loc;
+        let tag = op.tag.as_str();
+        let step = match tag {
+            "translate" => {
+                check_attrs(diag, loc, tag, &op.attrs, &["value", "x", "y", "z"])?;
+                Mat4::from_translation(xyz(op, Some(0.0))?)
+            }
             "scale" => {
-                let s = match ctx.attr(op, "value")? {
-                    Some(v) => match ctx.numbers(op, &v)?.as_slice() {
-                        [s] => Vec3::splat(*s as f32),
-                        [x, y, z] => Vec3::new(*x as f32, *y as f32, *z as f32),
-                        _ => {
-                            return Err(ctx.err(
-                                op,
-                                ErrorKind::Syntax,
-                                "scale needs 1 or 3 numbers",
-                            ))
-                        }
-                    },
-                    None => ctx.vec3_attrs(op, 1.0)?,
-                };
-                Mat4::from_scale(s)
+                check_attrs(diag, loc, tag, &op.attrs, &["value", "x", "y", "z"])?;
+                Mat4::from_scale(xyz(op, Some(1.0))?)
             }
             "rotate" => {
-                let axis = ctx.vec3_attrs(op, 0.0)?;
-                let angle = ctx.number(op, &ctx.req_attr(op, "angle")?)?;
+                check_attrs(
+                    diag,
+                    loc,
+                    tag,
+                    &op.attrs,
+                    &["!angle", "value", "x", "y", "z"],
+                )?;
+                let axis = xyz(op, Some(0.0))?;
+                let angle = number(loc, op.attr("angle").unwrap_or_default())?;
                 let Some(axis) = axis.try_normalize() else {
-                    return Err(ctx.err(op, ErrorKind::Syntax, "rotation axis is zero"));
+                    return Err(syntax(loc, "rotation axis is zero"));
                 };
                 Mat4::from_axis_angle(axis, (angle as f32).to_radians())
             }
             "matrix" => {
-                let v = ctx.numbers(op, &ctx.req_attr(op, "value")?)?;
+                check_attrs(diag, loc, tag, &op.attrs, &["!value"])?;
+                let v = numbers(loc, op.attr("value").unwrap_or_default())?;
                 let v: Vec<f32> = v.iter().map(|&x| x as f32).collect();
                 // Mitsuba writes matrices row by row; glam builds from columns.
                 match v.len() {
-                    16 => Mat4::from_cols_array(&v.try_into().unwrap_or([0.0; 16])).transpose(),
-                    9 => Mat4::from_mat3(
-                        Mat3::from_cols_array(&v.try_into().unwrap_or([0.0; 9])).transpose(),
-                    ),
+                    16 => Mat4::from_cols_slice(&v).transpose(),
+                    9 => Mat4::from_mat3(Mat3::from_cols_slice(&v).transpose()),
                     n => {
-                        return Err(ctx.err(
-                            op,
-                            ErrorKind::Syntax,
+                        return Err(syntax(
+                            loc,
                             format!("matrix needs 16 (or 9) numbers, got {n}"),
                         ))
                     }
                 }
             }
             "lookat" => {
-                let origin = ctx.vec3_text(op, &ctx.req_attr(op, "origin")?)?;
-                let target = ctx.vec3_text(op, &ctx.req_attr(op, "target")?)?;
-                let up = match ctx.attr(op, "up")? {
-                    Some(u) => ctx.vec3_text(op, &u)?,
-                    // Mitsuba picks any vector perpendicular to the view direction.
-                    None => (target - origin)
+                check_attrs(diag, loc, tag, &op.attrs, &["!origin", "!target", "up"])?;
+                let origin = vec3_text(loc, op.attr("origin").unwrap_or_default())?;
+                let target = vec3_text(loc, op.attr("target").unwrap_or_default())?;
+                let up = match op.attr("up") {
+                    Some(u) => vec3_text(loc, u)?,
+                    None => Vec3::ZERO,
+                };
+                // Mitsuba: a missing or zero `up` is the first vector of its
+                // `coordinate_system(direction)`.
+                let up = if up == Vec3::ZERO {
+                    (target - origin)
                         .try_normalize()
-                        .map_or(Vec3::Y, |d| d.any_orthonormal_vector()),
+                        .map_or(Vec3::Y, coordinate_system_s)
+                } else {
+                    up
                 };
                 look_at_matrix(origin, target, up).ok_or_else(|| {
-                    ctx.err(
-                        op,
-                        ErrorKind::Syntax,
+                    syntax(
+                        loc,
                         "lookat: origin equals target, or up is parallel to the view direction",
                     )
                 })?
             }
             other => {
-                ctx.warn(op, format!("unknown transform operation <{other}> ignored"));
+                diag.unsupported(
+                    loc,
+                    format!("unknown transform operation <{other}>"),
+                    "ignored",
+                )?;
                 continue;
             }
         };
         m = step * m;
     }
     if !m.is_finite() {
-        return Err(ctx.err(node, ErrorKind::Syntax, "transform is not finite"));
+        return Err(syntax(&e.loc, "transform is not finite"));
     }
     Ok(m)
+}
+
+/// The first tangent of Mitsuba's `coordinate_system(n)` (Duff et al. 2017).
+fn coordinate_system_s(n: Vec3) -> Vec3 {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x)
 }
