@@ -96,7 +96,13 @@ struct RenderArgs {
     /// Statistics as JSON.
     #[arg(long)]
     stats: Option<PathBuf>,
-    /// Skip stream compaction (the paper's `(NO)` variants).
+    /// Run stream compaction between iterations (the paper's renderer; its `(NO)`
+    /// variants turn it off). Off by default: with light sampling, the path state stays
+    /// coalesced without it and renders reach a given error about twice as fast on an H100
+    /// (BENCHMARKS.md, equal-time table).
+    #[arg(long, conflicts_with = "no_compact")]
+    compact: bool,
+    /// No stream compaction (the default; kept for scripts written for earlier versions).
     #[arg(long)]
     no_compact: bool,
     /// `nee`: next-event estimation (an emitter sample at every non-delta vertex, combined
@@ -250,7 +256,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         budget,
         seed: a.seed,
         size,
-        compact: !a.no_compact,
+        compact: a.compact,
         whole_group_end,
         integrator,
         coherent_light: a.coherent_light,
@@ -309,7 +315,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             (true, None) => "_rr".into(),
             (false, None) => String::new(),
         },
-        if a.no_compact { " (NO)" } else { "" },
+        if a.compact { "" } else { " (NO)" },
         a.n,
         a.in_patch,
         a.interleave,
@@ -365,7 +371,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
-            "compaction": !a.no_compact, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
+            "compaction": a.compact, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,
             "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "total": ms(k.total()) },
