@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use cohort::runtime::{BackendKind, Device};
-use cohort_render::{output, Algorithm, Budget, Image, InPatch, RenderOptions, RenderStats, Renderer};
+use cohort_render::{output, Algorithm, Budget, Image, InPatch, IntegratorKind, RenderOptions, RenderStats, Renderer};
 use cohort_scenes::embedded;
 use glam::Vec3;
 use plotters::backend::BitMapBackend;
@@ -77,6 +77,10 @@ pub struct FiguresArgs {
     /// turns on the GPU in this many slices of --time / SLICES each.
     #[arg(long, default_value_t = 8, allow_negative_numbers = true)]
     slices: u32,
+    /// `path`: the paper's implicit path tracing (the default here), or `nee`: next-event
+    /// estimation with MIS (does coherence still pay with light sampling?).
+    #[arg(long, default_value = "path")]
+    integrator: String,
 }
 
 /// The columns of the figures: the paper's three (Russian roulette per path or per
@@ -135,6 +139,7 @@ struct Plan {
     slices: u32,
     columns: Vec<Column>,
     end_continue: f32,
+    integrator: IntegratorKind,
 }
 
 impl Plan {
@@ -233,7 +238,13 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
         // and not inside a measured point.
         for alg in std::iter::once(Algorithm::NORMAL).chain(plan.configs.iter().copied()) {
             bar.set_message(format!("[{}/{total}] {} warm-up {}", done + 1, spec.label, alg.name()));
-            let opts = RenderOptions { algorithm: alg, budget: Budget::KernelTime(Duration::from_nanos(1)), size: Some((w, h)), ..Default::default() };
+            let opts = RenderOptions {
+                algorithm: alg,
+                budget: Budget::KernelTime(Duration::from_nanos(1)),
+                size: Some((w, h)),
+                integrator: plan.integrator,
+                ..Default::default()
+            };
             render(&device, &scene, opts, &bar, done).map_err(|e| format!("{} warm-up {}: {e}", spec.label, alg.name()))?;
         }
 
@@ -372,9 +383,11 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     if !(a.end_continue > 0.0 && a.end_continue <= 1.0) {
         return Err(format!("--end-continue {} is not in (0, 1]", a.end_continue));
     }
+    let integrator = IntegratorKind::parse(&a.integrator).ok_or_else(|| format!("unknown --integrator `{}` (path or nee)", a.integrator))?;
     Ok(Plan {
         columns,
         end_continue: a.end_continue,
+        integrator,
         scenes,
         configs,
         ns,
@@ -468,6 +481,7 @@ fn measure_group<'d>(
             size: Some((w, h)),
             compact: column.compact,
             whole_group_end: column.whole.then_some(plan.end_continue),
+            integrator: plan.integrator,
             ..Default::default()
         };
         if i < pool.len() {
@@ -539,6 +553,8 @@ fn reference_image(
         budget: Budget::KernelTime(plan.reference_time),
         seed: reference_seed(plan.seed),
         size: Some((w, h)),
+        // Both integrators converge to the same image; light sampling gets there sooner.
+        integrator: plan.integrator,
         ..Default::default()
     };
     let (image, stats) = render(device, scene, opts, bar, index).map_err(|e| format!("{} reference: {e}", spec.label))?;

@@ -217,6 +217,20 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     assert_eq!(rows.len(), 4, "normal and warp, in two columns: {rows:#?}");
     assert!(rows.iter().all(|r| r["rr"] == "whole" && r["config"] != "grid"), "{rows:#?}");
     assert_eq!(rows.iter().filter(|r| r["compaction"] == "false").count(), 2);
+
+    // The same sweep with light sampling: coherent configurations run with either integrator.
+    let out = cohort()
+        .args(["figures", "--scenes", "cornell", "--configs", "warp", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32"])
+        .args(["--backend", "vulkan", "--interleave", "none", "--columns", "path", "--slices", "1", "--integrator", "nee"])
+        .arg("--out-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
+    assert_eq!(rows.len(), 2, "normal and warp: {rows:#?}");
+    assert!(rows.iter().all(|r| num(r, "rms_percent").is_finite() && num(r, "rms_percent") > 0.0), "{rows:#?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -238,6 +252,7 @@ fn bad_lists_fail_naming_the_value() {
         (vec!["--columns", "path,sideways"], "sideways"),
         (vec!["--columns", "rr,rr"], "`rr`"),
         (vec!["--end-continue", "0"], "--end-continue"),
+        (vec!["--integrator", "photon"], "photon"),
     ] {
         let out = cohort().arg("figures").args(&args).arg("--out-dir").arg(&dir).output().unwrap();
         assert!(!out.status.success(), "{args:?} should fail");
