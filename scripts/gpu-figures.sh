@@ -22,6 +22,6 @@ export COHORT_VK_VALIDATION=0
 timeout ${LIMIT:-540} bin-gpu/cohort figures --backend vulkan --scenes ${SCENES:-confroom,fairyforest,sponza,stanford} \
   --configs ${CONFIGS:-normal,warp,block_256,block_512,block_1024,grid} --columns ${COLUMNS:-path,rr,rr-no} \
   --interleave ${INTERLEAVE:-5} --n ${NS:-4,16,64,250,1000} --time ${POINT_SECONDS:-0.2} --reference-time ${REF_SECONDS:-4} \
-  --slices ${SLICES:-8} --out-dir "$OUT/fig" 2>&1 | grep -v "^\s*$" > "$OUT/fig/figures.log"
+  --slices ${SLICES:-8} --integrator ${INTEGRATOR:-path} --out-dir "$OUT/fig" 2>&1 | grep -v "^\s*$" > "$OUT/fig/figures.log"
 tail -${LOG_LINES:-40} "$OUT/fig/figures.log"
 (cd "$OUT/fig" && tar czf ../figures${TAG:-}.tgz *.csv *.png *.svg *.log) && rm -rf "$OUT/fig"
