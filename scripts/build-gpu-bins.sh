@@ -4,11 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p bin-gpu
-cargo build --release -p cohort-cli -p cohort-render --example kernel_bench
+# The `cohort` binary explicitly: with `--example`, cargo builds only the examples.
+cargo build --release -p cohort-cli --bin cohort
+cargo build --release -p cohort-render --example kernel_bench
 cargo build --release -p cohort-tests --example compile_times
 cp target/release/cohort target/release/examples/kernel_bench target/release/examples/compile_times bin-gpu/
 json=$(cargo test --release --no-run -p cohort-tests -p cohort-render -p cohort-runtime --message-format=json 2>/dev/null)
-for t in difftest random_kernels traversal render compiler_bugs; do
+for t in difftest random_kernels traversal render nee compiler_bugs conformance_numeric; do
   exe=$(echo "$json" | grep -o "\"executable\":\"[^\"]*/$t-[^\"]*\"" | tail -1 | cut -d'"' -f4)
   cp "$exe" "bin-gpu/$t"
 done

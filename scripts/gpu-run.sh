@@ -10,10 +10,10 @@ export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export CI=true COHORT_VK_VALIDATION=0
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv | tee "$OUT/gpu.txt"
 {
-for t in difftest random_kernels traversal render runtime_dispatch runtime_errors; do
+for t in difftest random_kernels conformance_numeric traversal render nee runtime_dispatch runtime_errors; do
   [ -x "$B/$t" ] || continue
   # The shared scenes do not travel to the GPU machine: run the render tests that need none.
-  filter=""; [ "$t" = render ] && filter="backends_agree white_furnace"
+  filter=""; [ "$t" = render ] && filter="backends_agree white_furnace"; [ "$t" = nee ] && filter="white_furnace environment"
   echo "== $t"; (cd tests && ../$B/$t --test-threads 1 $filter 2>&1 | grep -E "^test |panicked|differ|test result" | tail -12)
 done
 } 2>&1 | tee "$OUT/tests.log"
