@@ -152,10 +152,11 @@ pub fn trace8<Q: HitQuery>(
     let mut stack = [0u32; STACK_SIZE];
     let mut sp = 0usize;
     let mut node = 0u32;
-    // A ray with a NaN or zero direction, or a NaN origin, misses: its box tests would
+    // A ray with a NaN or zero direction, or a NaN or huge origin, misses (dot products
+    // propagate NaN into an ordered compare, which min/max would not): its box tests would
     // enter every child (NaN compares false both ways), empty slots included, and send the
     // loop through invalid node references (a GPU hang on the H100).
-    let mut go = (f.has_geometry != 0) & (dir.dot(dir) > 0.0) & (org.abs().max_element() < 1.0e30);
+    let mut go = (f.has_geometry != 0) & (dir.dot(dir) > 0.0) & (org.dot(org) < 1.0e36);
     while go {
         // Both records are fetched at once: testing the second one only when it holds a
         // child (one more dependent fetch per node) measured 10% slower on primary rays.
