@@ -372,9 +372,10 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     }
     let mut columns: Vec<Column> = Vec::new();
     for c in list("--columns", &a.columns)? {
-        let col = COLUMNS.iter().find(|k| k.key == c).ok_or_else(|| {
-            format!("unknown column `{c}` in --columns (available: {})", COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", "))
-        })?;
+        let col = COLUMNS
+            .iter()
+            .find(|k| k.key == c)
+            .ok_or_else(|| format!("unknown column `{c}` in --columns (available: {})", COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", ")))?;
         if columns.contains(col) {
             return Err(format!("column `{c}` is listed twice in --columns"));
         }
@@ -558,7 +559,7 @@ fn reference_image(
         ..Default::default()
     };
     let (image, stats) = render(device, scene, opts, bar, index).map_err(|e| format!("{} reference: {e}", spec.label))?;
-    output::write_exr(&path, &image).map_err(|e| e.to_string())?;
+    output::write_exr(&path, &image, &[]).map_err(|e| e.to_string())?;
     log(format!(
         "{}: reference {:.1} paths/pixel in {:.2} s kernel time, wrote {}",
         spec.label,

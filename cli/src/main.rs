@@ -7,11 +7,16 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand};
-use cohort::runtime::{BackendKind, Device};
-use cohort_render::{output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer};
+use cohort_render::multi_device::{combined_stats, render_on_devices};
+use cohort_render::provenance::Provenance;
+use cohort_render::{
+    output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer, Shard,
+};
 use cohort_scenes::embedded;
 
+mod devices;
 mod figures;
+mod merge;
 
 #[derive(Parser)]
 #[command(
@@ -32,6 +37,10 @@ enum Command {
     Scenes,
     /// Run the paper's experiments (Figs. 4, 5, 7): a CSV and plots (docs/FIGURES.md).
     Figures(figures::FiguresArgs),
+    /// Merge the EXRs of a render's shards (`render --shard K/N`) into one image.
+    Merge(merge::MergeArgs),
+    /// List the usable devices of each backend, by the index `--devices` takes.
+    Devices,
 }
 
 #[derive(clap::Args)]
@@ -126,6 +135,14 @@ struct RenderArgs {
     /// `mitsuba -D NAME=VALUE`. Repeatable.
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     define: Vec<(String, String)>,
+    /// Render only shard K of N of the budget (0 <= K < N): with --paths P, paths
+    /// K*P/N..(K+1)*P/N of every pixel. `cohort merge` combines the shards' EXRs.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Render on several devices at once, one thread each, splitting the paths between
+    /// them: `all`, or device indices such as `0,1` (`cohort devices` lists them).
+    #[arg(long)]
+    devices: Option<String>,
 }
 
 /// `NAME=VALUE` of `-D`.
@@ -147,6 +164,8 @@ fn main() -> ExitCode {
         }
         Command::Render(a) => render(a),
         Command::Figures(a) => figures::run(a),
+        Command::Merge(a) => merge::run(a),
+        Command::Devices => devices::list(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -236,16 +255,13 @@ fn render(a: RenderArgs) -> Result<(), String> {
             h.unwrap_or(scene.camera.height),
         )),
     };
-    let device = match a.backend.as_deref() {
-        None => Device::best(),
-        Some(b) => Device::new(
-            BackendKind::parse(b)
-                .ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?,
-        ),
-    }
-    .map_err(|e| e.to_string())?;
+    let shard = match &a.shard {
+        Some(s) => Shard::parse(s).map_err(|e| format!("--shard: {e}"))?,
+        None => Shard::WHOLE,
+    };
+    let devices = devices::open(a.backend.as_deref(), a.devices.as_deref())?;
     let device_opened = process_start.elapsed();
-    let info = device.info().clone();
+    let info = devices[0].info().clone();
     let opts = RenderOptions {
         algorithm,
         in_patch,
@@ -261,38 +277,72 @@ fn render(a: RenderArgs) -> Result<(), String> {
         integrator,
         coherent_light: a.coherent_light,
         light_cells: a.light_cells,
+        shard,
         ..Default::default()
     };
-    let mut renderer = Renderer::new(&device, &scene, opts).map_err(|e| e.to_string())?;
+    let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
+    let device_names: Vec<String> = devices
+        .iter()
+        .map(|d| d.info().adapter_name.clone())
+        .collect();
+    // One device: the renderer is made here, so that its startup (BVH build, upload,
+    // pipelines) is reported apart from the render. Several: one thread per device.
+    let mut single = match devices.as_slice() {
+        [device] => Some(Renderer::new(device, &scene, opts.clone()).map_err(|e| e.to_string())?),
+        _ => None,
+    };
     // Everything before the first iteration: the render starts right after this.
     let ready = process_start.elapsed();
-    let startup = renderer.startup();
-    let (w, h) = renderer.size();
+    let startup = single.as_ref().map(|r| r.startup()).unwrap_or_default();
     eprintln!(
-        "{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}",
+        "{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}{}",
         a.scene,
         scene.triangles.len(),
-        info.adapter_name,
+        device_names.join(" + "),
         info.backend.name(),
-        algorithm.name()
+        algorithm.name(),
+        if shard == Shard::WHOLE {
+            String::new()
+        } else {
+            format!(", shard {shard}")
+        }
     );
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let (image, stats) = renderer
-        .render(|frac, s| {
-            bar.set_position((frac * 1000.0) as u64);
-            bar.set_message(format!(
-                "{:.2} paths/pixel, {} iterations",
-                s.paths_per_pixel(),
-                s.iterations
-            ));
-        })
-        .map_err(|e| e.to_string())?;
+    // Each device's thread reports its own fraction and statistics; the bar shows them
+    // together.
+    let progress = std::sync::Mutex::new(vec![
+        (0.0, cohort_render::RenderStats::default());
+        devices.len()
+    ]);
+    let report = |i: usize, frac: f64, s: &cohort_render::RenderStats| {
+        let mut all = progress.lock().unwrap_or_else(|p| p.into_inner());
+        all[i] = (frac, s.clone());
+        let frac = all.iter().map(|p| p.0).sum::<f64>() / all.len() as f64;
+        let s = combined_stats(&all.iter().map(|p| p.1.clone()).collect::<Vec<_>>());
+        bar.set_position((frac * 1000.0) as u64);
+        bar.set_message(format!(
+            "{:.2} paths/pixel, {} iterations",
+            s.paths_per_pixel(),
+            s.iterations
+        ));
+    };
+    let (image, per_device) = match single.as_mut() {
+        Some(renderer) => {
+            let (image, s) = renderer
+                .render(|frac, s| report(0, frac, s))
+                .map_err(|e| e.to_string())?;
+            (image, vec![s])
+        }
+        None => render_on_devices(&devices, &scene, &opts, &report).map_err(|e| e.to_string())?,
+    };
+    let stats = combined_stats(&per_device);
     bar.finish_and_clear();
-    output::write_exr(&a.out, &image).map_err(|e| e.to_string())?;
+    let provenance = Provenance::of(&a.scene, (w, h), &opts, &device_names.join("; "));
+    output::write_exr(&a.out, &image, &provenance.to_attributes()).map_err(|e| e.to_string())?;
     output::write_png(&a.png, &image, a.exposure).map_err(|e| e.to_string())?;
     let k = stats.kernel;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
@@ -301,12 +351,36 @@ fn render(a: RenderArgs) -> Result<(), String> {
         a.scene,
         scene.triangles.len()
     );
-    println!(
-        "device         {} [{}], subgroup {}",
-        info.adapter_name,
-        info.backend.name(),
-        info.subgroup_size
-    );
+    for (i, d) in devices.iter().enumerate() {
+        let info = d.info();
+        let label = if devices.len() > 1 {
+            format!("device {i}")
+        } else {
+            "device".into()
+        };
+        println!(
+            "{label:<14} {} [{}], subgroup {}",
+            info.adapter_name,
+            info.backend.name(),
+            info.subgroup_size
+        );
+    }
+    if shard != Shard::WHOLE {
+        let paths = match budget {
+            Budget::PathsPerPixel(p) => {
+                let r = shard.paths(p);
+                format!("paths {}..{} of {p} per pixel", r.start, r.end)
+            }
+            Budget::KernelTime(_) => format!(
+                "paths from {} on, for the time budget",
+                shard.time_first_path()
+            ),
+        };
+        println!(
+            "shard          {shard}: {paths} ({} merge)",
+            provenance.merge
+        );
+    }
     let config = format!(
         "{}{}{}, N = {}, in-patch {}, D = {}, integrator {}{}",
         algorithm.name(),
@@ -349,16 +423,29 @@ fn render(a: RenderArgs) -> Result<(), String> {
         "rays/s         {:.3} M (traversal)",
         stats.rays_per_second() / 1e6
     );
-    println!("wall           {:.2} s (render; {:.0} % over kernel time)", stats.wall.as_secs_f64(), 100.0 * (stats.wall.as_secs_f64() / k.total().as_secs_f64().max(1e-9) - 1.0));
-    println!(
-        "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3}",
-        ready.as_secs_f64(),
-        scene_loaded.as_secs_f64(),
-        (device_opened - scene_loaded).as_secs_f64(),
-        startup.bvh_build.as_secs_f64(),
-        startup.upload.as_secs_f64(),
-        startup.pipelines.as_secs_f64()
-    );
+    if devices.len() == 1 {
+        println!(
+            "wall           {:.2} s (render; {:.0} % over kernel time)",
+            stats.wall.as_secs_f64(),
+            100.0 * (stats.wall.as_secs_f64() / k.total().as_secs_f64().max(1e-9) - 1.0)
+        );
+        println!(
+            "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3}",
+            ready.as_secs_f64(),
+            scene_loaded.as_secs_f64(),
+            (device_opened - scene_loaded).as_secs_f64(),
+            startup.bvh_build.as_secs_f64(),
+            startup.upload.as_secs_f64(),
+            startup.pipelines.as_secs_f64()
+        );
+    } else {
+        // Kernel times are summed over devices; the wall time is the slowest device's.
+        println!(
+            "wall           {:.2} s (render on {} devices, the slowest; kernel time is their sum)",
+            stats.wall.as_secs_f64(),
+            devices.len()
+        );
+    }
     println!(
         "mean radiance  {:.4} {:.4} {:.4}",
         image.mean().x,
@@ -372,6 +459,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
             "compaction": a.compact, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
+            "shard": shard.to_string(), "devices": device_names,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,
             "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "total": ms(k.total()) },

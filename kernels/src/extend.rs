@@ -50,9 +50,9 @@ pub fn init_paths(
         return;
     }
     let pixel = slot_pixel[g];
-    let d = camera_dir(f, pixel, stream(f.seed, pixel, 0, 0));
+    let d = camera_dir(f, pixel, stream(f.seed, pixel, f.first_path, 0));
     idrays[g] = gi;
-    state[g] = UVec4::new(pixel, 0, 0, 0);
+    state[g] = UVec4::new(pixel, f.first_path, 0, 0);
     ray_o[g] = Vec4::new(f.cam_origin.x, f.cam_origin.y, f.cam_origin.z, 0.0);
     ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
     beta[g] = CAMERA_BETA;
@@ -94,21 +94,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     completed: &[AtomicU32],
 ) {
     // The group's shared draws come first, in uniform control flow: the patch of
-    // coherent sampling and the group's Russian-roulette number.
+    // coherent sampling and the group's Russian-roulette number. They are keyed by
+    // iteration, not by path, so each shard of a render draws them from its own seed.
     let shared_patch = group_share(|group| {
-        S::group_value(stream(f.seed, group, f.iteration, 0x5eed), f.patches_n)
+        S::group_value(
+            stream(f.group_seed, group, f.iteration, 0x5eed),
+            f.patches_n,
+        )
     });
     // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
     let shared_rr = group_share(|group| {
-        let k = stream(f.seed ^ 0x2b5e, group, f.iteration, 0x7a11);
+        let k = stream(f.group_seed ^ 0x2b5e, group, f.iteration, 0x7a11);
         Vec2::new(uniform(k, 0), uniform(k, 1))
     });
     let shared_cell =
-        group_share(|group| hash(stream(f.seed ^ 0x61c8, group, f.iteration, 0x9e37)));
+        group_share(|group| hash(stream(f.group_seed ^ 0x61c8, group, f.iteration, 0x9e37)));
     // Coherent light sampling: the group's light pick and stratum.
     let shared_light = group_share(|group| {
         shared_light_draw(
-            stream(f.seed ^ 0x11c3, group, f.iteration, 0x4a7f),
+            stream(f.group_seed ^ 0x11c3, group, f.iteration, 0x4a7f),
             f.light_cells,
         )
     });
@@ -364,7 +368,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             wg_done[0].fetch_add(1, Ordering::Relaxed);
             let next = path + 1;
             let mut done = 0u32;
-            if f.paths_per_pixel != 0 && next >= f.paths_per_pixel {
+            if f.paths_per_pixel != 0 && next - f.first_path >= f.paths_per_pixel {
                 done = DONE;
                 wg_done[1].fetch_add(1, Ordering::Relaxed);
             }

@@ -70,7 +70,8 @@ pub struct Frame {
     pub cam_up: Vec3,
     pub seed: u32,
     pub environment: Vec3,
-    /// Paths per pixel after which a slot stops regenerating (0 = never stop).
+    /// Paths per pixel after which a slot stops regenerating, counted from `first_path`
+    /// (0 = never stop).
     pub paths_per_pixel: u32,
     /// Paths longer than this many bounces end (0 = no limit; Russian roulette ends them).
     pub max_depth: u32,
@@ -103,8 +104,14 @@ pub struct Frame {
     pub coherent_light: u32,
     /// K of the K x K strata of a light's sample domain (coherent light sampling).
     pub light_cells: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// Index of every pixel's first path: a shard of a render (`--shard K/N`) renders
+    /// paths `first_path..first_path + paths_per_pixel`, drawing the same per-path random
+    /// numbers as an unsplit run does for those paths.
+    pub first_path: u32,
+    /// Seed of the group draws (keyed by iteration, not by path): `seed` in an unsplit
+    /// run, an independent stream per shard, so that shards do not repeat each other's
+    /// group draws.
+    pub group_seed: u32,
     pub pad2: u32,
 }
 

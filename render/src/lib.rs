@@ -1,13 +1,20 @@
 //! Host side of the path tracer. Data flow: `cohort-scenes` Scene → [`gpu_scene`]
 //! (BVH + triangles + materials on the device) → [`Renderer`] (path-state buffers and
 //! the iteration loop over the kernels of `cohort-kernels`) → [`Image`] → [`output`]
-//! (EXR / PNG files, written atomically).
+//! (EXR / PNG files, written atomically). A render can be split into [`shard`]s, whose
+//! EXRs ([`provenance`] in the header, path counts per pixel) [`input`] reads back and
+//! [`merge`] combines; [`multi_device`] does both in one process, on several devices.
 
 pub mod gpu_scene;
 pub mod image;
+pub mod input;
 pub mod lights;
+pub mod merge;
+pub mod multi_device;
 pub mod output;
+pub mod provenance;
 pub mod renderer;
+pub mod shard;
 
 pub use gpu_scene::GpuScene;
 pub use image::Image;
@@ -15,3 +22,4 @@ pub use renderer::{
     Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
     RenderStats, Renderer,
 };
+pub use shard::Shard;

@@ -14,14 +14,23 @@ pub struct OutputError {
 }
 
 fn temp_beside(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 /// Writes `path` through a temporary file: `write` fills the temporary file, which is
 /// renamed over `path` only if it succeeded.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), OutputError> {
-    let err = |message: String| OutputError { path: path.to_path_buf(), message };
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), OutputError> {
+    let err = |message: String| OutputError {
+        path: path.to_path_buf(),
+        message,
+    };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         if !dir.is_dir() {
             return Err(err(format!("directory {} does not exist", dir.display())));
@@ -40,20 +49,56 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), Str
     }
 }
 
-pub fn write_exr(path: &Path, img: &Image) -> Result<(), OutputError> {
+/// Writes a linear EXR: channels R, G, B (each pixel's mean over its paths, in f32) and
+/// `paths` (its path count, u32), which is what a merge weights by; `attributes` go into
+/// the header as text (`crate::provenance` writes how the image was rendered there).
+/// Text is stored as UTF-8 bytes, which OpenEXR's text attributes allow.
+pub fn write_exr(
+    path: &Path,
+    img: &Image,
+    attributes: &[(String, String)],
+) -> Result<(), OutputError> {
+    use exr::prelude::*;
     write_atomically(path, |tmp| {
-        let w = img.width as usize;
-        exr::prelude::write_rgb_file(tmp, w, img.height as usize, |x, y| {
-            let p = img.pixels[y * w + x];
-            (p.x, p.y, p.z)
-        })
-        .map_err(|e| e.to_string())
+        let channel = |name: &str, c: usize| {
+            AnyChannel::new(
+                name,
+                FlatSamples::F32(img.pixels.iter().map(|p| p[c]).collect()),
+            )
+        };
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            channel("R", 0),
+            channel("G", 1),
+            channel("B", 2),
+            AnyChannel::new("paths", FlatSamples::U32(img.paths.clone())),
+        ]));
+        let mut header = LayerAttributes::default();
+        for (key, value) in attributes {
+            header.other.insert(
+                Text::from_slice_unchecked(key.as_bytes()),
+                AttributeValue::Text(Text::from_slice_unchecked(value.as_bytes())),
+            );
+        }
+        let layer = Layer::new(
+            (img.width as usize, img.height as usize),
+            header,
+            Encoding::FAST_LOSSLESS,
+            channels,
+        );
+        Image::from_layer(layer)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| e.to_string())
     })
 }
 
 fn srgb(linear: f32) -> u8 {
     let c = linear.clamp(0.0, 1.0);
-    let s = if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    let s = if c <= 0.0031308 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
     (s * 255.0 + 0.5) as u8
 }
 
@@ -66,7 +111,11 @@ pub fn write_png(path: &Path, img: &Image, stops: f32) -> Result<(), OutputError
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         let mut writer = enc.write_header().map_err(|e| e.to_string())?;
-        let data: Vec<u8> = img.pixels.iter().flat_map(|p| [srgb(p.x * scale), srgb(p.y * scale), srgb(p.z * scale)]).collect();
+        let data: Vec<u8> = img
+            .pixels
+            .iter()
+            .flat_map(|p| [srgb(p.x * scale), srgb(p.y * scale), srgb(p.z * scale)])
+            .collect();
         writer.write_image_data(&data).map_err(|e| e.to_string())?;
         writer.finish().map_err(|e| e.to_string())
     })

@@ -10,7 +10,9 @@
 
 use std::time::{Duration, Instant};
 
-use cohort::runtime::{Batch, Device, DispatchStats, GpuBuffer, ReadBack, RuntimeError, Submission};
+use cohort::runtime::{
+    Batch, Device, DispatchStats, GpuBuffer, ReadBack, RuntimeError, Submission,
+};
 use cohort::Group;
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
@@ -25,7 +27,7 @@ use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_scenes::{morton_pixel_order, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
-use crate::{GpuScene, Image};
+use crate::{GpuScene, Image, Shard};
 
 /// A configuration of the paper: which invocations share a coherent draw, and whether
 /// diffuse bounces sample coherently at all.
@@ -144,6 +146,42 @@ pub struct RenderOptions {
     pub coherent_light: bool,
     /// K of the K x K strata of coherent light sampling (1..=64).
     pub light_cells: u32,
+    /// Which part of the budget's paths this run renders (`crate::shard`): shard K of N
+    /// renders paths K*P/N..(K+1)*P/N of every pixel under a budget of P paths per pixel.
+    pub shard: Shard,
+}
+
+impl RenderOptions {
+    /// Whether every random number a path draws depends only on (seed, pixel, path):
+    /// independent diffuse sampling, per-path roulette and independent light samples.
+    /// Then the shards of a paths budget merge into the unsplit run's image; otherwise
+    /// group draws keyed by iteration enter, and the merge is statistical.
+    pub fn per_path_sampling(&self) -> bool {
+        !self.algorithm.coherent
+            && !self.group_rr
+            && self.whole_group_end.is_none()
+            && !self.coherent_light
+    }
+
+    /// The paths of every pixel this run renders: (first path index, how many; 0 for a
+    /// time budget, which never stops a pixel).
+    fn path_range(&self) -> (u32, u32) {
+        match self.budget {
+            Budget::PathsPerPixel(p) => {
+                let r = self.shard.paths(p);
+                (r.start, r.end - r.start)
+            }
+            Budget::KernelTime(_) => (self.shard.time_first_path(), 0),
+        }
+    }
+
+    /// The budget of this run's own paths: a shard's share of a paths budget.
+    fn shard_budget(&self) -> Budget {
+        match self.budget {
+            Budget::PathsPerPixel(_) => Budget::PathsPerPixel(self.path_range().1),
+            time => time,
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -164,6 +202,7 @@ impl Default for RenderOptions {
             integrator: IntegratorKind::Path,
             coherent_light: false,
             light_cells: 4,
+            shard: Shard::WHOLE,
         }
     }
 }
@@ -432,12 +471,16 @@ impl<'d> Renderer<'d> {
     /// Changes the budget of the next `render` or `start` (e.g. a short unmeasured
     /// warm-up first). A paths-per-pixel budget is also where the kernels stop each
     /// pixel, so change it between runs, not in the middle of one.
-    pub fn set_budget(&mut self, budget: Budget) {
-        self.frame.paths_per_pixel = match budget {
-            Budget::PathsPerPixel(p) => p,
-            Budget::KernelTime(_) => 0,
+    pub fn set_budget(&mut self, budget: Budget) -> Result<(), RenderError> {
+        let opts = RenderOptions {
+            budget,
+            ..self.opts.clone()
         };
-        self.opts.budget = budget;
+        let (w, h) = self.size();
+        validate(&opts, w, h)?;
+        apply_options(&mut self.frame, &opts);
+        self.opts = opts;
+        Ok(())
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -446,13 +489,13 @@ impl<'d> Renderer<'d> {
 
     /// Renders until the budget is spent. `progress` receives the fraction done.
     /// The same as [`start`](Self::start), [`advance_with`](Self::advance_with) to the
-    /// options' budget, then [`image`](Self::image).
+    /// options' budget (a shard's share of it), then [`image`](Self::image).
     pub fn render(
         &mut self,
         progress: impl FnMut(f64, &RenderStats),
     ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
-        let stats = self.advance_with(self.opts.budget, progress)?;
+        let stats = self.advance_with(self.opts.shard_budget(), progress)?;
         Ok((self.image()?, stats))
     }
 
@@ -463,7 +506,7 @@ impl<'d> Renderer<'d> {
         mut progress: impl FnMut(f64, &RenderStats),
     ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
-        let stats = self.with_sampler::<S, _>(Advance { until: self.opts.budget, progress: &mut progress })?;
+        let stats = self.with_sampler::<S, _>(Advance { until: self.opts.shard_budget(), progress: &mut progress })?;
         Ok((self.image()?, stats))
     }
 
@@ -508,7 +551,8 @@ impl<'d> Renderer<'d> {
     }
 
     /// Continues the run begun by [`start`](Self::start) until the *cumulative* budget
-    /// `until` is reached (kernel time, or paths per pixel on average), and returns the
+    /// `until` is reached (kernel time, or paths per pixel on average, counting this
+    /// run's own paths: a shard's, not the whole budget's), and returns the
     /// cumulative statistics; an `until` already reached renders nothing. Pixels stop at
     /// the paths-per-pixel count of the options' budget (fixed for the run), so a run
     /// under a time budget never ends by itself. The kernels are chosen by the options,
@@ -628,7 +672,8 @@ impl<'d> Renderer<'d> {
             while in_flight.len() < IN_FLIGHT {
                 let queued: u32 = in_flight.iter().map(|q| q.iterations).sum();
                 let stats = &run.stats;
-                let projected_time = stats.kernel.total().as_secs_f64() + run.per_iteration.unwrap_or(0.0) * queued as f64;
+                let projected_time = stats.kernel.total().as_secs_f64()
+                    + run.per_iteration.unwrap_or(0.0) * queued as f64;
                 let projected = match until {
                     Budget::KernelTime(t) => projected_time / t.as_secs_f64(),
                     Budget::PathsPerPixel(_) => done(stats),
@@ -643,12 +688,21 @@ impl<'d> Renderer<'d> {
                     None if !in_flight.is_empty() => break,
                     None => 1,
                     Some(per_iter) => {
-                        let mut want = (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
+                        let mut want =
+                            (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
                         match until {
                             // Do not overshoot a time budget by more than a tenth of what is left.
-                            Budget::KernelTime(t) => want = want.min((0.1 * (t.as_secs_f64() - projected_time).max(0.0) / per_iter.max(1e-7)).max(1.0)),
+                            Budget::KernelTime(t) => {
+                                want = want.min(
+                                    (0.1 * (t.as_secs_f64() - projected_time).max(0.0)
+                                        / per_iter.max(1e-7))
+                                    .max(1.0),
+                                )
+                            }
                             // Every path needs a few iterations; finish in small steps near the end.
-                            Budget::PathsPerPixel(_) => want = want.min(((1.0 - projected.min(1.0)) * 200.0).max(1.0)),
+                            Budget::PathsPerPixel(_) => {
+                                want = want.min(((1.0 - projected.min(1.0)) * 200.0).max(1.0))
+                            }
                         }
                         want as u32
                     }
@@ -657,10 +711,24 @@ impl<'d> Renderer<'d> {
                 let mut stages = Vec::new();
                 for k in 0..batch_iterations {
                     self.frame.iteration = run.stats.iterations + queued + k;
-                    run.cur = record_iteration::<S, E, I>(&mut b, &specs, &self.frame, &self.scene, p, run.cur, self.opts.compact, &mut stages)?;
+                    run.cur = record_iteration::<S, E, I>(
+                        &mut b,
+                        &specs,
+                        &self.frame,
+                        &self.scene,
+                        p,
+                        run.cur,
+                        self.opts.compact,
+                        &mut stages,
+                    )?;
                 }
                 let counters = b.read_back(&p.counters)?;
-                in_flight.push_back(Pending { submission: b.submit_async()?, stages, iterations: batch_iterations, counters });
+                in_flight.push_back(Pending {
+                    submission: b.submit_async()?,
+                    stages,
+                    iterations: batch_iterations,
+                    counters,
+                });
             }
             let Some(oldest) = in_flight.pop_front() else {
                 // Nothing left to submit or wait for: the budget is reached.
@@ -906,6 +974,14 @@ fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
             opts.light_cells
         )));
     }
+    if let Budget::PathsPerPixel(p) = opts.budget {
+        if opts.shard.paths(p).is_empty() {
+            return Err(RenderError::Options(format!(
+                "shard {} of {p} paths per pixel has no path: split a budget of {p} paths into at most {p} shards",
+                opts.shard
+            )));
+        }
+    }
     if let Some(q) = opts.whole_group_end {
         if !(q > 0.0 && q <= 1.0) {
             return Err(RenderError::Options(format!("whole-group end continuation {q} is not in (0, 1] (0 would cut paths short: biased)")));
@@ -924,10 +1000,8 @@ fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
 /// Writes the options into the frame the kernels read.
 fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
     frame.seed = opts.seed;
-    frame.paths_per_pixel = match opts.budget {
-        Budget::PathsPerPixel(p) => p,
-        Budget::KernelTime(_) => 0,
-    };
+    (frame.first_path, frame.paths_per_pixel) = opts.path_range();
+    frame.group_seed = opts.shard.group_seed(opts.seed);
     frame.rr_continue = opts.rr_continue;
     frame.patches_n = opts.patches_n;
     frame.group_rr = opts.group_rr as u32;

@@ -90,10 +90,38 @@ impl std::fmt::Debug for Device {
 }
 
 impl Device {
+    /// The best device of the backend: a discrete GPU if there is one.
     pub fn new(kind: BackendKind) -> Result<Device> {
+        Device::open(kind, None)
+    }
+
+    /// Device number `index` of the backend, in the order it lists its usable devices
+    /// (for Vulkan, the loader's order of the devices with Vulkan 1.1 and a compute
+    /// queue). An index past the last is `RuntimeError::NoSuchDevice`, which names the
+    /// devices there are.
+    pub fn new_index(kind: BackendKind, index: usize) -> Result<Device> {
+        Device::open(kind, Some(index))
+    }
+
+    /// Every usable device of the backend, each opened on its own (so one thread per
+    /// device can drive them at once), in index order.
+    pub fn all(kind: BackendKind) -> Result<Vec<Device>> {
+        let mut devices = Vec::new();
+        loop {
+            match Device::new_index(kind, devices.len()) {
+                Ok(d) => devices.push(d),
+                Err(RuntimeError::NoSuchDevice { .. }) if !devices.is_empty() => {
+                    return Ok(devices)
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn open(kind: BackendKind, which: Option<usize>) -> Result<Device> {
         let inner = match kind {
-            BackendKind::Wgpu => Inner::Wgpu(Arc::new(wgpu_backend::WgpuDevice::new()?)),
-            BackendKind::Vulkan => Inner::Vulkan(Arc::new(vulkan_backend::VkDevice::new()?)),
+            BackendKind::Wgpu => Inner::Wgpu(Arc::new(wgpu_backend::WgpuDevice::new(which)?)),
+            BackendKind::Vulkan => Inner::Vulkan(Arc::new(vulkan_backend::VkDevice::new(which)?)),
         };
         Ok(Device { inner })
     }

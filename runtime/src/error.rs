@@ -7,6 +7,19 @@ use crate::BackendKind;
 
 pub type Result<T> = std::result::Result<T, RuntimeError>;
 
+/// `the devices are 0: A, 1: B`, for an error about a device index.
+fn device_list(names: &[String]) -> String {
+    if names.is_empty() {
+        return "this machine has no usable device".into();
+    }
+    let list: Vec<String> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| format!("{i}: {n}"))
+        .collect();
+    format!("the devices are {}", list.join(", "))
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum RuntimeError {
     #[error(
@@ -17,6 +30,18 @@ pub enum RuntimeError {
     NoAdapter {
         backend: BackendKind,
         detail: String,
+    },
+
+    #[error(
+        "there is no {} device {index}: {}",
+        backend.name(),
+        device_list(available)
+    )]
+    NoSuchDevice {
+        backend: BackendKind,
+        index: usize,
+        /// The names of the devices there are, by index.
+        available: Vec<String>,
     },
 
     #[error("could not create a {} device: {detail}", backend.name())]

@@ -154,8 +154,9 @@ impl Drop for VkDevice {
 }
 
 impl VkDevice {
-    pub(crate) fn new() -> Result<Self> {
-        let Opened { shared, desc } = vulkan_init::open()?;
+    /// The best device, or the usable device number `which` (`vulkan_init::open`).
+    pub(crate) fn new(which: Option<usize>) -> Result<Self> {
+        let Opened { shared, desc } = vulkan_init::open(which)?;
         // From here, dropping `shared` on an error path destroys the device and instance.
         let shared = Arc::new(shared);
         let submitter = Submitter::new(&shared.device, desc.queue_family)?;
@@ -983,7 +984,7 @@ mod tests {
     /// The messenger really collects: provoke one invalid call through the raw device.
     #[test]
     fn validation_messages_are_collected() {
-        let Ok(dev) = VkDevice::new() else { return };
+        let Ok(dev) = VkDevice::new(None) else { return };
         if dev.shared.debug.is_none() {
             println!("skipping: validation layer not active");
             return;

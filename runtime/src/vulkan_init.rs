@@ -137,9 +137,14 @@ fn device_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
-/// Prefers a discrete GPU; needs Vulkan 1.1 (subgroup operations) and a compute queue,
-/// preferring a compute family that supports timestamps.
-fn pick_physical_device(instance: &ash::Instance, instance_api: u32) -> Result<Candidate> {
+/// Prefers a discrete GPU, or takes the usable device number `which` in the loader's
+/// order; needs Vulkan 1.1 (subgroup operations) and a compute queue, preferring a
+/// compute family that supports timestamps.
+fn pick_physical_device(
+    instance: &ash::Instance,
+    instance_api: u32,
+    which: Option<usize>,
+) -> Result<Candidate> {
     let physicals =
         unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
     if physicals.is_empty() {
@@ -187,6 +192,25 @@ fn pick_physical_device(instance: &ash::Instance, instance_api: u32) -> Result<C
             timestamp_valid_bits: family.timestamp_valid_bits,
         });
     }
+    if let Some(index) = which {
+        if index >= candidates.len() {
+            let available = candidates
+                .iter()
+                .map(|c| {
+                    c.props
+                        .device_name_as_c_str()
+                        .map(|n| n.to_string_lossy().into_owned())
+                        .unwrap_or_default()
+                })
+                .collect();
+            return Err(RuntimeError::NoSuchDevice {
+                backend: BackendKind::Vulkan,
+                index,
+                available,
+            });
+        }
+        return Ok(candidates.swap_remove(index));
+    }
     candidates
         .into_iter()
         .min_by_key(|c| device_rank(c.props.device_type))
@@ -209,8 +233,9 @@ pub(crate) struct Description {
 }
 
 /// Loads Vulkan, creates the instance (with validation where wanted), picks a physical
-/// device and creates the logical device with its allocator.
-pub(crate) fn open() -> Result<Opened> {
+/// device (the best, or the usable one numbered `which`) and creates the logical device
+/// with its allocator.
+pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
     let entry = unsafe { ash::Entry::load() }
         .map_err(|e| no_adapter(format!("could not load libvulkan.so.1 ({e})")))?;
     let loader_api = unsafe { entry.try_enumerate_instance_version() }
@@ -288,7 +313,7 @@ pub(crate) fn open() -> Result<Opened> {
     let debug = debug.flatten();
 
     // From here on, failures must destroy the instance; `open_device` does the rest.
-    match open_device(&instance, instance_api) {
+    match open_device(&instance, instance_api, which) {
         Ok((device, allocator, desc)) => Ok(Opened {
             shared: Shared {
                 _entry: entry,
@@ -317,8 +342,9 @@ pub(crate) fn open() -> Result<Opened> {
 fn open_device(
     instance: &ash::Instance,
     instance_api: u32,
+    which: Option<usize>,
 ) -> Result<(ash::Device, Allocator, Description)> {
-    let c = pick_physical_device(instance, instance_api)?;
+    let c = pick_physical_device(instance, instance_api, which)?;
     let api = c.api;
     let pd = c.physical;
 

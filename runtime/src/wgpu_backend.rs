@@ -88,12 +88,23 @@ fn adapter_rank(t: wgpu::DeviceType) -> u32 {
 }
 
 impl WgpuDevice {
-    pub(crate) fn new() -> Result<Self> {
+    /// The best adapter, or adapter number `which` in wgpu's order.
+    pub(crate) fn new(which: Option<usize>) -> Result<Self> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        if let Some(index) = which {
+            if index >= adapters.len() {
+                return Err(RuntimeError::NoSuchDevice {
+                    backend: BACKEND,
+                    index,
+                    available: adapters.iter().map(|a| a.get_info().name).collect(),
+                });
+            }
+            adapters = vec![adapters.swap_remove(index)];
+        }
         let adapter = adapters
             .into_iter()
             .min_by_key(|a| adapter_rank(a.get_info().device_type))

@@ -1,0 +1,66 @@
+//! Which devices a command runs on: `--backend` and `--devices` (none: the best device;
+//! `all`: every usable device of the backend; `0,2`: those indices, as `cohort devices`
+//! lists them).
+
+use cohort::runtime::{BackendKind, Device};
+
+/// The backend `--backend` names, or the one `Device::best` would pick.
+fn backend_kind(backend: Option<&str>) -> Result<BackendKind, String> {
+    match backend {
+        Some(b) => {
+            BackendKind::parse(b).ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))
+        }
+        None => Ok(Device::best().map_err(|e| e.to_string())?.info().backend),
+    }
+}
+
+/// Opens the devices of `--devices` on `--backend`; every index is checked before any
+/// work starts, so a bad one fails at once, naming the devices there are.
+pub fn open(backend: Option<&str>, devices: Option<&str>) -> Result<Vec<Device>, String> {
+    let Some(list) = devices else {
+        let device = match backend {
+            None => Device::best(),
+            Some(_) => Device::new(backend_kind(backend)?),
+        };
+        return Ok(vec![device.map_err(|e| e.to_string())?]);
+    };
+    let kind = backend_kind(backend)?;
+    if list.trim() == "all" {
+        return Device::all(kind).map_err(|e| e.to_string());
+    }
+    let mut indices: Vec<usize> = Vec::new();
+    for item in list.split(',').map(str::trim) {
+        let i: usize = item
+            .parse()
+            .map_err(|_| format!("--devices `{list}`: `{item}` is not a device index (expected `all` or a list such as 0,1)"))?;
+        if indices.contains(&i) {
+            return Err(format!("--devices `{list}`: device {i} is listed twice"));
+        }
+        indices.push(i);
+    }
+    indices
+        .into_iter()
+        .map(|i| Device::new_index(kind, i).map_err(|e| format!("--devices `{list}`: {e}")))
+        .collect()
+}
+
+/// `cohort devices`: every usable device of each backend, by index.
+pub fn list() -> Result<(), String> {
+    for kind in [BackendKind::Vulkan, BackendKind::Wgpu] {
+        match Device::all(kind) {
+            Ok(devices) => {
+                for (i, d) in devices.iter().enumerate() {
+                    let info = d.info();
+                    println!(
+                        "{:<7} {i}  {} ({})",
+                        kind.name(),
+                        info.adapter_name,
+                        info.driver
+                    );
+                }
+            }
+            Err(e) => println!("{:<7} none: {e}", kind.name()),
+        }
+    }
+    Ok(())
+}
