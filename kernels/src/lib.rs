@@ -22,4 +22,5 @@ pub mod rng;
 pub mod sampling;
 pub mod shadow;
 pub mod traverse;
+pub mod traverse_cw;
 pub mod traverse_wide;

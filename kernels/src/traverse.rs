@@ -23,17 +23,16 @@ pub fn slab(org: Vec3, inv_dir: Vec3, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 
 }
 
 /// Watertight ray/triangle intersection (Woop, Benthin & Wald 2013) in the ray's
-/// sheared space. `px`, `py`, `pz` are one-hot vectors selecting the ray's axes kx, ky,
-/// kz (`dot(a, px)` is exactly `a[kx]`, without the dynamic vector indexing that would
-/// spill to memory on GPUs). Returns (t, u, v) in xyz and 1 in w on a hit within
-/// (tmin, tmax), else w = 0.
+/// sheared space. Vertices are rotated into the ray's axis order (kx, ky, kz) with
+/// [`rotate`], the origin once per ray (`org_r = rotate(org, kz)`): a cyclic rotation is
+/// two vector selects per vertex, where a dot product with a one-hot axis vector was three
+/// multiply-adds per component (and would turn an infinite coordinate into NaN). Returns
+/// (t, u, v) in xyz and 1 in w on a hit within (tmin, tmax), else w = 0.
 #[kernel_fn]
 #[allow(clippy::too_many_arguments)]
 pub fn intersect(
-    org: Vec3,
-    px: Vec3,
-    py: Vec3,
-    pz: Vec3,
+    org_r: Vec3,
+    kz: u32,
     shear: Vec3,
     v0: Vec3,
     v1: Vec3,
@@ -41,18 +40,15 @@ pub fn intersect(
     tmin: f32,
     tmax: f32,
 ) -> Vec4 {
-    let a = v0 - org;
-    let b = v1 - org;
-    let c = v2 - org;
-    let az0 = a.dot(pz);
-    let bz0 = b.dot(pz);
-    let cz0 = c.dot(pz);
-    let ax = a.dot(px) - shear.x * az0;
-    let ay = a.dot(py) - shear.y * az0;
-    let bx = b.dot(px) - shear.x * bz0;
-    let by = b.dot(py) - shear.y * bz0;
-    let cx = c.dot(px) - shear.x * cz0;
-    let cy = c.dot(py) - shear.y * cz0;
+    let a = rotate(v0, kz) - org_r;
+    let b = rotate(v1, kz) - org_r;
+    let c = rotate(v2, kz) - org_r;
+    let ax = a.x - shear.x * a.z;
+    let ay = a.y - shear.y * a.z;
+    let bx = b.x - shear.x * b.z;
+    let by = b.y - shear.y * b.z;
+    let cx = c.x - shear.x * c.z;
+    let cy = c.y - shear.y * c.z;
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -62,12 +58,54 @@ pub fn intersect(
     let mixed = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
     let det = u + v + w;
     if !mixed & (det != 0.0) {
-        let t = (u * (shear.z * az0) + v * (shear.z * bz0) + w * (shear.z * cz0)) / det;
+        let t = (u * (shear.z * a.z) + v * (shear.z * b.z) + w * (shear.z * c.z)) / det;
         if (t > tmin) & (t < tmax) {
             result = Vec4::new(t, v / det, w / det, 1.0);
         }
     }
     result
+}
+
+/// `v` in the axis order (kx, ky, kz) of a ray whose dominant axis is `kz`, with
+/// kx = kz + 1 and ky = kz + 2 (mod 3): a cyclic rotation of the components.
+#[kernel_fn]
+pub fn rotate(v: Vec3, kz: u32) -> Vec3 {
+    if kz == 0 {
+        Vec3::new(v.y, v.z, v.x)
+    } else if kz == 1 {
+        Vec3::new(v.z, v.x, v.y)
+    } else {
+        v
+    }
+}
+
+/// Intersects the ray with triangles `first..first + cnt` and returns `best` updated: the
+/// closest hit so far as (t, u, v, triangle index as bits), t in x also when there is
+/// none (then w keeps `best.w`). For `AnyHit` it returns at the first hit.
+#[kernel_fn]
+#[allow(clippy::too_many_arguments)]
+pub fn leaf_hits<Q: HitQuery>(
+    org_r: Vec3,
+    kz: u32,
+    shear: Vec3,
+    first: u32,
+    cnt: u32,
+    tmin: f32,
+    best: Vec4,
+    tris: &[Triangle],
+) -> Vec4 {
+    let mut b = best;
+    for k in first..first + cnt {
+        let t = tris[k as usize];
+        let h = intersect(org_r, kz, shear, t.v0, t.v1, t.v2, tmin, b.x);
+        if h.w != 0.0 {
+            b = Vec4::new(h.x, h.y, h.z, f32::from_bits(k));
+            if Q::ANY {
+                break;
+            }
+        }
+    }
+    b
 }
 
 /// The ray's dominant axis kz (Woop et al.): 0, 1 or 2.
@@ -81,16 +119,6 @@ pub fn dominant_axis(dir: Vec3) -> u32 {
         kz = 1;
     }
     kz
-}
-
-/// One-hot vector of axis `k`.
-#[kernel_fn]
-pub fn axis(k: u32) -> Vec3 {
-    Vec3::new(
-        (k == 0) as u32 as f32,
-        (k == 1) as u32 as f32,
-        (k == 2) as u32 as f32,
-    )
 }
 
 /// Traces the ray (`org`, `dir`) over (`tmin`, `tmax`) through the BVH2: (t, u, v,
@@ -109,13 +137,9 @@ pub fn trace2<Q: HitQuery>(
 ) -> Vec4 {
     let inv = dir.recip();
     let kz = dominant_axis(dir);
-    let kx = (kz + 1) % 3;
-    let ky = (kx + 1) % 3;
-    let px = axis(kx);
-    let py = axis(ky);
-    let pz = axis(kz);
-    let dz = dir.dot(pz);
-    let shear = Vec3::new(dir.dot(px) / dz, dir.dot(py) / dz, 1.0 / dz);
+    let d_r = rotate(dir, kz);
+    let org_r = rotate(org, kz);
+    let shear = Vec3::new(d_r.x / d_r.z, d_r.y / d_r.z, 1.0 / d_r.z);
     let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
     let mut stack = [0u32; 64];
@@ -143,16 +167,11 @@ pub fn trace2<Q: HitQuery>(
                 if child & 0x8000_0000 != 0 {
                     let first = child & 0x0fff_ffff;
                     let cnt = ((child >> 28) & 7) + 1;
-                    for k in first..first + cnt {
-                        let t = tris[k as usize];
-                        let h = intersect(org, px, py, pz, shear, t.v0, t.v1, t.v2, tmin, best_t);
-                        if h.w != 0.0 {
-                            best_t = h.x;
-                            best = Vec4::new(h.x, h.y, h.z, f32::from_bits(k));
-                            if Q::ANY {
-                                go = false;
-                                break;
-                            }
+                    best = leaf_hits::<Q>(org_r, kz, shear, first, cnt, tmin, best, tris);
+                    best_t = best.x;
+                    if Q::ANY {
+                        if best.w.to_bits() != MISS {
+                            go = false;
                         }
                     }
                 } else if next_a == 0xffff_ffff {
@@ -233,15 +252,27 @@ pub fn traverse(
     tris: &[Triangle],
     hits: &mut [Vec4],
 ) {
-    let i = gi as usize;
-    if gi >= count[0] {
-        return;
+    let r = live_slot(gi, count, idrays, state);
+    if r != NO_SLOT {
+        trace_ray(r, f, ray_o, ray_d, nodes, tris, hits);
     }
-    let r = idrays[i] as usize;
-    if state[r].w & DONE != 0 {
-        return;
+}
+
+/// No live ray slot for this invocation (see [`live_slot`]).
+pub const NO_SLOT: u32 = 0xffff_ffff;
+
+/// The ray slot that invocation `gi` of a traversal traces: entry `gi` of the id list
+/// when it is within the `count[0]` listed and its path is not done, else [`NO_SLOT`].
+#[kernel_fn]
+pub fn live_slot(gi: u32, count: &[u32], idrays: &[u32], state: &[UVec4]) -> u32 {
+    let mut r = NO_SLOT;
+    if gi < count[0] {
+        let s = idrays[gi as usize];
+        if state[s as usize].w & DONE == 0 {
+            r = s;
+        }
     }
-    trace_ray(r as u32, f, ray_o, ray_d, nodes, tris, hits);
+    r
 }
 
 /// Persistent-threads traversal (Aila & Laine 2009): a fixed number of invocations

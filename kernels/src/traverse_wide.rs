@@ -9,7 +9,7 @@
 
 use crate::layout::*;
 use crate::shadow::finish_slot;
-use crate::traverse::{axis, dominant_axis, intersect};
+use crate::traverse::{dominant_axis, leaf_hits, live_slot, rotate, NO_SLOT};
 use cohort::prelude::*;
 
 /// Four children of an 8-wide node (same bytes as `cohort_scenes::GpuWideNode`).
@@ -132,13 +132,9 @@ pub fn trace8<Q: HitQuery>(
 ) -> Vec4 {
     let inv = dir.recip();
     let kz = dominant_axis(dir);
-    let kx = (kz + 1) % 3;
-    let ky = (kx + 1) % 3;
-    let px = axis(kx);
-    let py = axis(ky);
-    let pz = axis(kz);
-    let dz = dir.dot(pz);
-    let shear = Vec3::new(dir.dot(px) / dz, dir.dot(py) / dz, 1.0 / dz);
+    let d_r = rotate(dir, kz);
+    let org_r = rotate(org, kz);
+    let shear = Vec3::new(d_r.x / d_r.z, d_r.y / d_r.z, 1.0 / d_r.z);
     let neg = UVec3::new(
         (inv.x < 0.0) as u32,
         (inv.y < 0.0) as u32,
@@ -173,17 +169,12 @@ pub fn trace8<Q: HitQuery>(
             let child = pick(a.child, b.child, p ^ oct);
             let first = child & 0x0fff_ffff;
             let cnt = ((child >> 28) & 7) + 1;
-            for k in first..first + cnt {
-                let t = tris[k as usize];
-                let h = intersect(org, px, py, pz, shear, t.v0, t.v1, t.v2, tmin, best_t);
-                if h.w != 0.0 {
-                    best_t = h.x;
-                    best = Vec4::new(h.x, h.y, h.z, f32::from_bits(k));
-                    if Q::ANY {
-                        leaves = 0;
-                        go = false;
-                        break;
-                    }
+            best = leaf_hits::<Q>(org_r, kz, shear, first, cnt, tmin, best, tris);
+            best_t = best.x;
+            if Q::ANY {
+                if best.w.to_bits() != MISS {
+                    leaves = 0;
+                    go = false;
                 }
             }
         }
@@ -255,15 +246,10 @@ pub fn traverse8(
     tris: &[Triangle],
     hits: &mut [Vec4],
 ) {
-    let i = gi as usize;
-    if gi >= count[0] {
-        return;
+    let r = live_slot(gi, count, idrays, state);
+    if r != NO_SLOT {
+        trace_ray8(r, f, ray_o, ray_d, nodes, tris, hits);
     }
-    let r = idrays[i] as usize;
-    if state[r].w & DONE != 0 {
-        return;
-    }
-    trace_ray8(r as u32, f, ray_o, ray_d, nodes, tris, hits);
 }
 
 /// The shadow pass of next-event estimation over the 8-wide BVH: for every live slot,

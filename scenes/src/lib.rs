@@ -32,7 +32,7 @@ pub use bvh::{
     brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, BvhError, GpuBvh,
     GpuBvhNode, GpuTriangle, Hit,
 };
-pub use bvh::{closest_hit8, GpuBvh8, GpuWideNode, WideBvhError};
+pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhError};
 pub use camera::{Camera, CameraFrame, FovAxis};
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use material::{Bsdf, GpuMaterial, Material};

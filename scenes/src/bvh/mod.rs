@@ -44,12 +44,14 @@
 
 mod build;
 mod traverse;
+pub mod compressed;
 pub mod wide;
 
 use glam::Vec3;
 
 pub use build::BvhError;
 pub use traverse::{brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, Hit};
+pub use compressed::{GpuCwBvh, GpuCwNode};
 pub use wide::{closest_hit8, GpuBvh8, GpuWideNode, WideBvhError};
 
 #[repr(C)]
