@@ -430,6 +430,13 @@ fn render(a: RenderArgs) -> Result<(), String> {
             100.0 * (stats.wall.as_secs_f64() / k.total().as_secs_f64().max(1e-9) - 1.0)
         );
         println!(
+            "host           {} batches: record {:.1} ms, submit {:.1} ms, wait {:.1} ms",
+            stats.host.batches,
+            ms(stats.host.record),
+            ms(stats.host.submit),
+            ms(stats.host.wait)
+        );
+        println!(
             "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3}",
             ready.as_secs_f64(),
             scene_loaded.as_secs_f64(),
@@ -465,6 +472,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(),
+            "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
             "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": scene_loaded.as_secs_f64(), "device": (device_opened - scene_loaded).as_secs_f64(),
                 "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64() },
             "scene_integrator": {

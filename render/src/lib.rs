@@ -20,6 +20,6 @@ pub use gpu_scene::GpuScene;
 pub use image::Image;
 pub use renderer::{
     Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
-    RenderStats, Renderer,
+    HostTimes, RenderStats, Renderer,
 };
 pub use shard::Shard;

@@ -87,6 +87,10 @@ pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
         all.kernel.shadow += s.kernel.shadow;
         all.kernel.compact += s.kernel.compact;
         all.wall = all.wall.max(s.wall);
+        all.host.record += s.host.record;
+        all.host.submit += s.host.submit;
+        all.host.wait += s.host.wait;
+        all.host.batches += s.host.batches;
         all.pixels = s.pixels;
     }
     all

@@ -267,7 +267,22 @@ pub struct RenderStats {
     pub kernel: KernelTimes,
     pub wall: Duration,
     pub pixels: u64,
+    /// Where the host's time went: recording batches, submitting them, and waiting for
+    /// the oldest one in flight (the GPU is busy then; recording while it is idle is
+    /// what makes the wall time exceed the kernel time).
+    pub host: HostTimes,
 }
+
+/// Host time of a render, by stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HostTimes {
+    /// Batches submitted.
+    pub batches: u32,
+    pub record: Duration,
+    pub submit: Duration,
+    pub wait: Duration,
+}
+
 impl RenderStats {
     pub fn paths_per_pixel(&self) -> f64 {
         self.completed_paths as f64 / self.pixels.max(1) as f64
@@ -665,6 +680,8 @@ impl<'d> Renderer<'d> {
         // lowers its clocks (1980 -> 345 MHz on the H100 and H200, reason "idle").
         const TARGET_SUBMIT: Duration = Duration::from_millis(10);
         const IN_FLIGHT: usize = 2;
+        // Fewest iterations in a batch near the end of a paths budget.
+        const TAIL_BATCH: f64 = 8.0;
         let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
             // Submit while fewer than IN_FLIGHT batches run and what is known (finished
@@ -699,14 +716,25 @@ impl<'d> Renderer<'d> {
                                     .max(1.0),
                                 )
                             }
-                            // Every path needs a few iterations; finish in small steps near the end.
+                            // The iterations still needed, extrapolated from the paths
+                            // completed so far, less those queued. Not below a floor: an
+                            // iteration past the end costs little (finished slots return at
+                            // once), while a small batch leaves the GPU idle as the host
+                            // turns around (measured: 51 % over kernel time on cornell-box).
                             Budget::PathsPerPixel(_) => {
-                                want = want.min(((1.0 - projected.min(1.0)) * 200.0).max(1.0))
+                                let it = stats.iterations as f64;
+                                let remaining = if projected > 0.02 {
+                                    it * (1.0 - projected.min(1.0)) / projected - queued as f64
+                                } else {
+                                    f64::INFINITY
+                                };
+                                want = want.min(remaining.max(TAIL_BATCH))
                             }
                         }
                         want as u32
                     }
                 };
+                let recording = Instant::now();
                 let mut b = d.batch();
                 let mut stages = Vec::new();
                 for k in 0..batch_iterations {
@@ -723,8 +751,13 @@ impl<'d> Renderer<'d> {
                     )?;
                 }
                 let counters = b.read_back(&p.counters)?;
+                let submitting = Instant::now();
+                run.stats.host.record += submitting - recording;
+                let submission = b.submit_async()?;
+                run.stats.host.submit += submitting.elapsed();
+                run.stats.host.batches += 1;
                 in_flight.push_back(Pending {
-                    submission: b.submit_async()?,
+                    submission,
                     stages,
                     iterations: batch_iterations,
                     counters,
@@ -735,8 +768,10 @@ impl<'d> Renderer<'d> {
                 run.stats.wall = wall_before + resumed.elapsed();
                 return Ok(run.stats.clone());
             };
+            let waiting = Instant::now();
             let completed = oldest.submission.wait()?;
             let stats = &mut run.stats;
+            stats.host.wait += waiting.elapsed();
             let mut batch_time = Duration::ZERO;
             for (stage, t) in oldest.stages.iter().zip(&completed.stats) {
                 stats.kernel.add(*stage, ns(t));
