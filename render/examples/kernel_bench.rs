@@ -29,6 +29,27 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// Records `reps` dispatches with `record` into batches and runs them until the GPU has
+/// been busy for 0.3 s (its clocks ramp up from idle over about that time, and the host
+/// phases of this benchmark let it idle), then once more; returns that batch's stats.
+fn timed(
+    d: &Device,
+    reps: u32,
+    record: impl Fn(&mut cohort::runtime::Batch),
+) -> Vec<DispatchStats> {
+    let start = std::time::Instant::now();
+    loop {
+        let mut b = d.batch();
+        for _ in 0..reps {
+            record(&mut b);
+        }
+        let stats = b.submit().unwrap();
+        if start.elapsed().as_secs_f64() > 0.3 {
+            return stats;
+        }
+    }
+}
+
 fn ns(s: &DispatchStats) -> f64 {
     s.gpu_time_ns.expect("this benchmark needs GPU timestamps") as f64
 }
@@ -127,14 +148,17 @@ fn bench_traversal(d: &Device, scene_name: &str) {
                 d, &spec, n, &frame, &count, &ids, &state, ob, db, nodes, tris, &hits,
             )
             .unwrap();
-            let mut b = d.batch();
-            for _ in 0..reps {
-                traverse::record(
-                    &mut b, &spec, n, &frame, &count, &ids, &state, ob, db, nodes, tris, &hits,
-                )
-                .unwrap();
-            }
-            median(b.submit().unwrap().iter().map(ns).collect())
+            median(
+                timed(d, reps, |b| {
+                    traverse::record(
+                        b, &spec, n, &frame, &count, &ids, &state, ob, db, nodes, tris, &hits,
+                    )
+                    .unwrap();
+                })
+                .iter()
+                .map(ns)
+                .collect(),
+            )
         };
     let hits8 = d.alloc::<Vec4>(n as usize).unwrap();
     let time_trace8_on =
@@ -145,14 +169,17 @@ fn bench_traversal(d: &Device, scene_name: &str) {
                 d, &spec8, n, &frame, &count, &ids, &state, ob, db, nodes8, tris, &hits8,
             )
             .unwrap();
-            let mut b = d.batch();
-            for _ in 0..reps {
-                traverse8::record(
-                    &mut b, &spec8, n, &frame, &count, &ids, &state, ob, db, nodes8, tris, &hits8,
-                )
-                .unwrap();
-            }
-            median(b.submit().unwrap().iter().map(ns).collect())
+            median(
+                timed(d, reps, |b| {
+                    traverse8::record(
+                        b, &spec8, n, &frame, &count, &ids, &state, ob, db, nodes8, tris, &hits8,
+                    )
+                    .unwrap();
+                })
+                .iter()
+                .map(ns)
+                .collect(),
+            )
         };
     // Other leaf sizes (SAH collapse of the BVH2 before widening): (max triangles, traversal
     // cost); both kernels run on each (their own BVH2 and triangle order).
@@ -193,14 +220,17 @@ fn bench_traversal(d: &Device, scene_name: &str) {
             d, &spec, n, &frame, &count, &ids, &state, ob, db, &r_cw, &r_tris, &hits_cw,
         )
         .unwrap();
-        let mut b = d.batch();
-        for _ in 0..reps {
-            traverse_cw::record(
-                &mut b, &spec, n, &frame, &count, &ids, &state, ob, db, &r_cw, &r_tris, &hits_cw,
-            )
-            .unwrap();
-        }
-        median(b.submit().unwrap().iter().map(ns).collect())
+        median(
+            timed(d, reps, |b| {
+                traverse_cw::record(
+                    b, &spec, n, &frame, &count, &ids, &state, ob, db, &r_cw, &r_tris, &hits_cw,
+                )
+                .unwrap();
+            })
+            .iter()
+            .map(ns)
+            .collect(),
+        )
     };
     // traverse8 and the compressed kernel alternate (8-wide first and last).
     let compare_cw = |label: &str, ob: &Buf<Vec4>, db: &Buf<Vec4>| {
@@ -370,14 +400,9 @@ fn bench_compaction(d: &Device) {
     let scratch = d.alloc::<u32>(compact::scratch_len(m as usize)).unwrap();
     let total = d.alloc::<u32>(1).unwrap();
     let cspecs = compact::specs(d);
-    let mut b = d.batch();
-    for _ in 0..reps {
-        compact::record(
-            &mut b, &cspecs, m, &mcount, &flags, &scratch, &total, &idr, &out,
-        )
-        .unwrap();
-    }
-    let st = b.submit().unwrap();
+    let st = timed(d, reps, |b| {
+        compact::record(b, &cspecs, m, &mcount, &flags, &scratch, &total, &idr, &out).unwrap();
+    });
     let k = compact::DISPATCHES;
     let per: Vec<f64> = st.chunks(k).map(|c| c.iter().map(ns).sum()).collect();
     let t_compact = median(per);
@@ -401,11 +426,14 @@ fn bench_compaction(d: &Device) {
         "compaction total"
     );
     let cspec = copy_u32::spec(d, None);
-    let mut b = d.batch();
-    for _ in 0..reps {
-        copy_u32::record(&mut b, &cspec, m, &idr, &out).unwrap();
-    }
-    let t_copy = median(b.submit().unwrap().iter().map(ns).collect());
+    let t_copy = median(
+        timed(d, reps, |b| {
+            copy_u32::record(b, &cspec, m, &idr, &out).unwrap()
+        })
+        .iter()
+        .map(ns)
+        .collect(),
+    );
     let copy_gbs = (m as f64 * 8.0) / t_copy;
     // Minimal traffic of a stable partition: read flag and id, write id (12 B/element).
     let compact_gbs = (m as f64 * 12.0) / t_compact;
