@@ -114,8 +114,25 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, Comp
         workgroup_size: [built.spec.workgroup_size, 1, 1],
         bindings: built.bindings.clone(),
         features: KernelFeatures {
+            workgroup_memory_bytes: workgroup_memory_bytes(&e.module),
             subgroups: built.uses_subgroups,
             required_subgroup_size: built.spec.required_subgroup_size,
         },
     })
+}
+
+/// Bytes of the module's workgroup variables (naga's layout: each variable aligned).
+fn workgroup_memory_bytes(module: &naga::Module) -> u64 {
+    let mut layouter = naga::proc::Layouter::default();
+    if layouter.update(module.to_ctx()).is_err() {
+        return 0;
+    }
+    let mut bytes = 0u64;
+    for (_, v) in module.global_variables.iter() {
+        if v.space == naga::AddressSpace::WorkGroup {
+            let l = &layouter[v.ty];
+            bytes = bytes.next_multiple_of(l.alignment.round_up(1) as u64) + l.size as u64;
+        }
+    }
+    bytes
 }

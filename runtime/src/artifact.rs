@@ -29,6 +29,9 @@ pub struct KernelFeatures {
     pub subgroups: bool,
     /// Needs the subgroup to be exactly this wide (Vulkan: requiredSubgroupSize).
     pub required_subgroup_size: Option<u32>,
+    /// Bytes of workgroup memory (`#[workgroup]` arrays) one workgroup uses; a launch
+    /// checks it against the device's limit.
+    pub workgroup_memory_bytes: u64,
 }
 
 /// One compiled kernel specialisation.

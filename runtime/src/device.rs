@@ -43,6 +43,8 @@ pub(crate) struct Limits {
     pub max_storage_binding: u64,
     pub max_uniform_binding: u64,
     pub subgroups: bool,
+    /// Bytes of workgroup memory one workgroup may use.
+    pub max_workgroup_memory: u64,
 }
 
 /// How many workgroups to launch.
@@ -501,6 +503,13 @@ fn check_call(
             kernel: name(),
             backend: info.backend,
             feature: "subgroup operations",
+        });
+    }
+    if kernel.features.workgroup_memory_bytes > limits.max_workgroup_memory {
+        return Err(RuntimeError::WorkgroupMemoryTooLarge {
+            kernel: name(),
+            bytes: kernel.features.workgroup_memory_bytes,
+            max: limits.max_workgroup_memory,
         });
     }
     let wg = kernel.workgroup_size;

@@ -98,6 +98,14 @@ pub enum RuntimeError {
         max: [u32; 3],
     },
 
+    /// Checked before dispatch: a launch over the limit hung the H100 and was reported by
+    /// the software driver's validation layer only afterwards.
+    #[error(
+        "kernel `{kernel}`: its #[workgroup] arrays take {bytes} bytes per workgroup, more \
+         than the device's {max}: use smaller arrays (or fewer per kernel)"
+    )]
+    WorkgroupMemoryTooLarge { kernel: String, bytes: u64, max: u64 },
+
     #[error(
         "kernel `{kernel}`: workgroup size {size:?} exceeds the device limits (at most \
          {max_size:?} per dimension and {max_invocations} invocations)"

@@ -516,6 +516,7 @@ fn open_device(
         max_workgroup_size: l.max_compute_work_group_size,
         max_invocations: l.max_compute_work_group_invocations,
         max_storage_binding: l.max_storage_buffer_range as u64,
+        max_workgroup_memory: l.max_compute_shared_memory_size as u64,
         max_uniform_binding: l.max_uniform_buffer_range as u64,
         subgroups: subgroup_ops_ok,
     };

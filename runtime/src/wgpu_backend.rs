@@ -174,6 +174,7 @@ impl WgpuDevice {
             ],
             max_invocations: l.max_compute_invocations_per_workgroup,
             max_storage_binding: l.max_storage_buffer_binding_size,
+            max_workgroup_memory: l.max_compute_workgroup_storage_size as u64,
             max_uniform_binding: l.max_uniform_buffer_binding_size,
             subgroups: features.contains(wgpu::Features::SUBGROUP),
         };

@@ -412,6 +412,7 @@ fn subgroup_probe(required: Option<u32>) -> cohort_runtime::KernelArtifact {
         KernelFeatures {
             subgroups: true,
             required_subgroup_size: required,
+            ..Default::default()
         },
     )
 }

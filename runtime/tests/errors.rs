@@ -313,6 +313,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(subgroup_size) s
             KernelFeatures {
                 subgroups: true,
                 required_subgroup_size: Some(too_big),
+                ..Default::default()
             },
         );
         let buf: GpuBuffer<u32> = dev.alloc(64).unwrap();
