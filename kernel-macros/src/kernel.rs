@@ -6,6 +6,7 @@ use proc_macro2::TokenStream;
 use quote::{format_ident, quote, quote_spanned, ToTokens};
 use std::collections::HashSet;
 use syn::parse::{Parse, ParseStream};
+use syn::spanned::Spanned;
 use syn::{FnArg, ItemFn, Pat, Type};
 
 use crate::rewrite::{err_at, Bind, Rewriter};
@@ -236,6 +237,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     let mut launch_names = Vec::new();
     let mut launch_args = Vec::new();
     let mut uniform_uploads = Vec::new();
+    let mut layout_checks = Vec::new();
     for (i, p) in params.iter().enumerate() {
         let name = &p.name;
         let lit = name.to_string();
@@ -248,6 +250,18 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 rw.bind(&lit, Bind::Val);
             }
             ParamKind::Storage { elem, writable } => {
+                // An element whose host size is not its GPU array stride (Vec3: 12 bytes on
+                // the host, 16 apart in a WGSL array) would be misread: refused at compile
+                // time where the type names no generic parameter, else when the kernel is built.
+                if !mentions_any(elem, &rw.generics) {
+                    let espan = elem.span();
+                    layout_checks.push(quote_spanned! {espan=>
+                        const _: () = ::core::assert!(
+                            ::cohort::ir::storage_element_ok::<#elem>(),
+                            "this storage buffer's element type has another size on the host than its stride in a GPU array (e.g. Vec3: 12 bytes on the host, 16 apart on the GPU), so the buffer would be misread: use Vec4, [f32; 3] or a #[derive(GpuType)] struct of the same size on both"
+                        );
+                    });
+                }
                 decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Buffer::<#elem>::declare(#lit, #writable); });
                 rw.bind(&lit, Bind::Root);
                 launch_names.push(name.clone());
@@ -335,6 +349,8 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 group: #group,
             };
 
+            #(#layout_checks)*
+
             #[doc(hidden)]
             pub struct __Key #generics (::core::marker::PhantomData<fn() -> (#(#type_params,)*)>);
 
@@ -421,4 +437,16 @@ fn collect_group_closures(b: &syn::Block) -> Vec<syn::ExprClosure> {
     let mut v = V(Vec::new());
     v.visit_block(b);
     v.0
+}
+
+/// Whether `ty` names any of `names` (the kernel's generic type parameters).
+fn mentions_any(ty: &syn::Type, names: &std::collections::HashSet<String>) -> bool {
+    fn walk(ts: proc_macro2::TokenStream, names: &std::collections::HashSet<String>) -> bool {
+        ts.into_iter().any(|t| match t {
+            proc_macro2::TokenTree::Ident(i) => names.contains(&i.to_string()),
+            proc_macro2::TokenTree::Group(g) => walk(g.stream(), names),
+            _ => false,
+        })
+    }
+    walk(quote::ToTokens::to_token_stream(ty), names)
 }

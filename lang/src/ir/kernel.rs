@@ -278,7 +278,7 @@ impl<T: GpuType> Buffer<T> {
         let stride = round_up(T::GPU_SIZE, T::GPU_ALIGN);
         let info = with(|c| c.info);
         assert!(
-            T::HOST_SHAREABLE,
+            super::types::storage_element_ok::<T>(),
             "kernel `{}`, buffer `{name}`: elements of type `{}` have a different layout on the host \
              and the GPU (GPU stride {stride} bytes, host size {}); use a type with the same layout \
              (e.g. Vec4 or [f32; 3] instead of Vec3)",

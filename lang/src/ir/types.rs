@@ -310,3 +310,12 @@ fn check_layout(m: &Module, name: &str, h: Handle<Type>, members: &[MemberDesc],
          fields so the size is a multiple of the largest field alignment"
     );
 }
+
+/// Whether a storage buffer of `T` can be shared with the host as bytes: `T` has the GPU
+/// layout and its host size is its stride in a GPU array (Vec3 is 12 bytes on the host and
+/// 16 apart in a WGSL array). The kernel macro asserts it at compile time per buffer
+/// parameter; `Buffer::declare` again when the kernel is built (for generic element types).
+#[doc(hidden)]
+pub const fn storage_element_ok<T: GpuType>() -> bool {
+    T::HOST_SHAREABLE && std::mem::size_of::<T>() == round_up(T::GPU_SIZE, T::GPU_ALIGN)
+}
