@@ -238,6 +238,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     let mut launch_args = Vec::new();
     let mut uniform_uploads = Vec::new();
     let mut layout_checks = Vec::new();
+    let mut storage_names = Vec::new();
     for (i, p) in params.iter().enumerate() {
         let name = &p.name;
         let lit = name.to_string();
@@ -265,6 +266,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Buffer::<#elem>::declare(#lit, #writable); });
                 rw.bind(&lit, Bind::Root);
                 launch_names.push(name.clone());
+                storage_names.push(name.clone());
                 launch_params.push(quote_spanned! {pspan=> #name: &::cohort::runtime::GpuBuffer<<#elem as ::cohort::ir::HostRepr>::Pod> });
                 launch_args.push(quote! { #name.arg() });
             }
@@ -306,6 +308,18 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         });
     }
 
+    // `len()` reads the element counts the launch passes (a binding the kernel has only when
+    // it calls `len()`): an empty buffer is bound to a stand-in whose size the GPU would see.
+    let lengths_upload = quote! {
+        let __lengths_at = art.bindings.iter().position(|b| b.name == ::cohort::ir::LENGTHS_BINDING);
+        let __lengths = match __lengths_at {
+            Some(_) => Some(device.upload(&[#(#storage_names.len() as u32),*])?),
+            None => None,
+        };
+    };
+    let lengths_arg = quote! {
+        if let (Some(at), Some(b)) = (__lengths_at, &__lengths) { __args.insert(at, b.arg()); }
+    };
     let fn_name = &f.sig.ident;
     let vis = &f.vis;
     let name_lit = fn_name.to_string();
@@ -394,8 +408,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 let device = batch.device();
                 let art = artifact #turbofish (spec)?;
                 #(#uniform_uploads)*
+                #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
                 #(#grid_uploads)*
+                #lengths_arg
                 let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
                 ::core::result::Result::Ok(batch.dispatch(&art, &__args, dispatch)?)
             }
@@ -409,8 +425,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
                 let art = artifact #turbofish (spec)?;
                 #(#uniform_uploads)*
+                #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
                 #(#grid_uploads)*
+                #lengths_arg
                 let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
                 ::core::result::Result::Ok(device.dispatch(&art, &__args, dispatch)?)
             }

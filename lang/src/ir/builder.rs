@@ -64,6 +64,9 @@ pub(crate) struct Ctx {
     pub uses_subgroups: bool,
     pub next_binding: u32,
     pub bindings: Vec<cohort_runtime::Binding>,
+    /// Storage buffers declared so far, and the lengths binding once `len()` is used.
+    pub storage_buffers: u32,
+    pub lengths: Option<Handle<naga::GlobalVariable>>,
     pub group_share_sites: u32,
     /// What the kernel asks for that this specialisation cannot lower (e.g. `group_any`
     /// at grid level): reported by `emit` as a compile error at the kernel's span.
@@ -148,6 +151,8 @@ impl Ctx {
             info,
             uses_subgroups: false,
             next_binding: 0,
+            storage_buffers: 0,
+            lengths: None,
             bindings: Vec::new(),
             group_share_sites: 0,
             unsupported: Vec::new(),

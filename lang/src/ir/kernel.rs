@@ -264,7 +264,28 @@ fn global_ptr(g: Handle<GlobalVariable>) -> Handle<Expression> {
 /// A storage buffer parameter (`&[T]` or `&mut [T]`).
 pub struct Buffer<T> {
     g: Handle<GlobalVariable>,
+    /// Index among the kernel's storage buffers: its entry in the lengths binding.
+    slot: u32,
     _t: PhantomData<fn() -> T>,
+}
+
+/// Name of the binding through which a launch passes the element count of every storage
+/// buffer (only kernels that call `len()` have it); generated launch code fills it.
+#[doc(hidden)]
+pub const LENGTHS_BINDING: &str = "__lengths";
+
+/// The lengths binding, declared on first use.
+fn lengths_global() -> Handle<GlobalVariable> {
+    if let Some(g) = with(|c| c.lengths) {
+        return g;
+    }
+    let ty = with(|c| {
+        let base = <u32 as GpuType>::naga_type(&mut c.module);
+        c.ty(TypeInner::Array { base, size: ArraySize::Dynamic, stride: 4 })
+    });
+    let g = add_global(LENGTHS_BINDING, AddressSpace::Storage { access: StorageAccess::LOAD }, ty, Some(BindingKind::StorageRead));
+    with(|c| c.lengths = Some(g));
+    g
 }
 impl<T> Clone for Buffer<T> {
     fn clone(&self) -> Self {
@@ -292,13 +313,22 @@ impl<T: GpuType> Buffer<T> {
         });
         let access = if writable { StorageAccess::LOAD | StorageAccess::STORE } else { StorageAccess::LOAD };
         let kind = if writable { BindingKind::StorageReadWrite } else { BindingKind::StorageRead };
-        Buffer { g: add_global(name, AddressSpace::Storage { access }, ty, Some(kind)), _t: PhantomData }
+        let slot = with(|c| {
+            c.storage_buffers += 1;
+            c.storage_buffers - 1
+        });
+        Buffer { g: add_global(name, AddressSpace::Storage { access }, ty, Some(kind)), slot, _t: PhantomData }
     }
 
-    /// `buf.len()`
+    /// `buf.len()`: the element count the launch passed (not the bound size, which for an
+    /// empty buffer is a stand-in's).
     pub fn len(&self) -> Val<usize> {
-        let p = global_ptr(self.g);
-        Val::from_handle(with(|c| c.expr(Expression::ArrayLength(p))))
+        let p = global_ptr(lengths_global());
+        let slot = self.slot;
+        Val::from_handle(with(|c| {
+            let at = c.expr(Expression::AccessIndex { base: p, index: slot });
+            c.expr(Expression::Load { pointer: at })
+        }))
     }
     pub fn is_empty(&self) -> Val<bool> {
         super::ops::eq(self.len(), crate::ir::val::lit(0usize))
