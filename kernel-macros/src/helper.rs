@@ -107,7 +107,10 @@ fn ir_body(sig: &Signature, block: &syn::Block, key: TokenStream, extra_generics
     let body = rw.block(block)?;
     let prelude = &s.prelude;
     let tokens = if s.inline {
-        quote! { #(#prelude)* #body }
+        // Inlined (it takes a buffer or a reference): still tracked on the call stack, so
+        // that recursion through helpers is an error of the kernel's build, not an endless
+        // inlining.
+        quote! { #(#prelude)* ::cohort::ir::inlined::<#key, _>(#display, || #body) }
     } else {
         let is_conv = |t: &&TokenStream| {
             let s = t.to_string();
@@ -142,6 +145,8 @@ fn static_where(generics: &syn::Generics) -> TokenStream {
 }
 
 pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
+    // Expanded anyway, so that callers see the helper and the refusal is the only error.
+    let refusal = refuse_self_call(&f).err().map(|e| e.to_compile_error());
     let tps: Vec<_> = f
         .sig
         .generics
@@ -158,6 +163,7 @@ pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
     let ret = &s.ret;
     let wh = static_where(generics);
     Ok(quote! {
+        #refusal
         #f
 
         #[allow(non_snake_case, unused_imports, unused_variables, unused_mut, unused_braces, unused_parens, clippy::all)]
@@ -248,4 +254,43 @@ pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
     }
     i.items.extend(extra);
     Ok(quote!(#i))
+}
+
+/// A helper that calls itself is refused at the call: GPUs have no call stack (naga and
+/// WGSL forbid recursion). Recursion through other helpers is found when the kernel is
+/// built (`cohort::ir::function`), where the whole call graph is known.
+fn refuse_self_call(f: &syn::ItemFn) -> syn::Result<()> {
+    use syn::visit::Visit;
+    struct V<'a> {
+        name: &'a syn::Ident,
+        found: Option<proc_macro2::Span>,
+    }
+    impl<'ast> Visit<'ast> for V<'_> {
+        fn visit_expr_call(&mut self, c: &'ast syn::ExprCall) {
+            if let syn::Expr::Path(p) = &*c.func {
+                let segs = &p.path.segments;
+                let direct = segs.len() == 1
+                    || (segs.len() == 2 && matches!(segs[0].ident.to_string().as_str(), "self" | "super" | "crate" | "Self"));
+                if direct && segs.last().is_some_and(|s| &s.ident == self.name) && self.found.is_none() {
+                    self.found = Some(syn::spanned::Spanned::span(&c.func));
+                }
+            }
+            syn::visit::visit_expr_call(self, c);
+        }
+        // A nested item's body is not this function's.
+        fn visit_item(&mut self, _: &'ast syn::Item) {}
+    }
+    let mut v = V { name: &f.sig.ident, found: None };
+    v.visit_block(&f.block);
+    match v.found {
+        Some(span) => Err(syn::Error::new(
+            span,
+            format!(
+                "`{}` calls itself: kernel code cannot recurse (GPUs have no call stack); \
+                 write it as a loop, with a local array as the stack if it needs one",
+                f.sig.ident
+            ),
+        )),
+        None => Ok(()),
+    }
 }

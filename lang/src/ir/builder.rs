@@ -13,7 +13,7 @@
 use naga::{Block, Expression, Function, Handle, Module, Span, Statement, Type, TypeInner};
 use std::any::TypeId;
 use std::cell::RefCell;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 
 use crate::spec::{KernelInfo, Spec};
 
@@ -58,7 +58,8 @@ pub(crate) struct Ctx {
     pub module: Module,
     pub fns: Vec<FnState>,
     pub fn_cache: HashMap<(TypeId, &'static str), Handle<naga::Function>>,
-    pub in_progress: HashSet<(TypeId, &'static str)>,
+    /// Helpers being built or inlined, outermost first: a call already on it recurses.
+    pub call_stack: Vec<(TypeId, &'static str)>,
     pub spec: Spec,
     pub info: &'static KernelInfo,
     pub uses_subgroups: bool,
@@ -146,7 +147,7 @@ impl Ctx {
             module: Module::default(),
             fns: Vec::new(),
             fn_cache: HashMap::new(),
-            in_progress: HashSet::new(),
+            call_stack: Vec::new(),
             spec,
             info,
             uses_subgroups: false,

@@ -82,6 +82,9 @@ pub trait Return {
     /// Records the `return` of the tail value at the end of the body.
     fn finish(self);
     fn from_call(h: Option<Handle<Expression>>) -> Self;
+    /// A stand-in value for a call that is not made (it would recurse: an error is
+    /// already recorded).
+    fn placeholder() -> Self;
 }
 impl Return for () {
     fn result(_: &mut naga::Module) -> Option<FunctionResult> {
@@ -89,6 +92,7 @@ impl Return for () {
     }
     fn finish(self) {}
     fn from_call(_: Option<Handle<Expression>>) -> Self {}
+    fn placeholder() -> Self {}
 }
 impl<T: GpuType> Return for Val<T> {
     fn result(m: &mut naga::Module) -> Option<FunctionResult> {
@@ -100,11 +104,60 @@ impl<T: GpuType> Return for Val<T> {
     fn from_call(h: Option<Handle<Expression>>) -> Self {
         Val::from_handle(h.expect("call result"))
     }
+    fn placeholder() -> Self {
+        Val::from_handle(with(|c| {
+            let ty = T::naga_type(&mut c.module);
+            c.expr(Expression::ZeroValue(ty))
+        }))
+    }
 }
 
 /// Calls helper `name` (identified by `K`, a type unique to the helper instance), building
 /// it first if this module does not have it yet.
 pub fn function<K: 'static + ?Sized, P: Params, R: Return>(
+    name: &'static str,
+    param_names: &[&str],
+    args: P,
+    body: impl FnOnce(P) -> R,
+) -> R {
+    let key = (TypeId::of::<K>(), name);
+    enter(key, name, || call_helper::<K, P, R>(key, name, param_names, args, body))
+}
+
+/// Records the body of helper `name`, which takes a buffer or a reference, in the caller
+/// (WGSL functions cannot take such pointers), tracking it on the call stack as
+/// [`function`] does.
+#[doc(hidden)]
+pub fn inlined<K: 'static + ?Sized, R: Return>(name: &'static str, body: impl FnOnce() -> R) -> R {
+    enter((TypeId::of::<K>(), name), name, body)
+}
+
+/// Runs `build` with `key` on the call stack, unless the call recurses.
+fn enter<R: Return>(key: (TypeId, &'static str), name: &'static str, build: impl FnOnce() -> R) -> R {
+    // Recursion through other helpers (a helper calling itself directly is refused by
+    // `#[kernel_fn]` at compile time): reported as the kernel's build error with the
+    // chain of calls, and the call replaced by a zero value so that building can finish.
+    let cycle = with(|c| {
+        c.call_stack.iter().position(|k| *k == key).map(|at| {
+            let chain: Vec<&str> = c.call_stack[at..].iter().map(|k| k.1).chain([name]).collect();
+            c.unsupported.push(format!(
+                "helper `{name}` calls itself through {}: kernel code cannot recurse (GPUs have no \
+                 call stack); write it as a loop, with a local array as the stack if it needs one",
+                chain.join(" -> ")
+            ));
+        })
+    });
+    if cycle.is_some() {
+        return R::placeholder();
+    }
+    with(|c| c.call_stack.push(key));
+    let r = build();
+    with(|c| c.call_stack.pop());
+    r
+}
+
+fn call_helper<K: 'static + ?Sized, P: Params, R: Return>(
+    key: (TypeId, &'static str),
     name: &'static str,
     param_names: &[&str],
     args: P,
@@ -118,15 +171,11 @@ pub fn function<K: 'static + ?Sized, P: Params, R: Return>(
         with(|c| c.inline_depth -= 1);
         return r;
     }
-    let key = (TypeId::of::<K>(), name);
     let cached = with(|c| c.fn_cache.get(&key).copied());
     let fh = match cached {
         Some(h) => h,
         None => {
             let fresh = with(|c| {
-                if !c.in_progress.insert(key) {
-                    panic!("helper `{name}` calls itself: kernels cannot recurse");
-                }
                 let types = P::types(&mut c.module);
                 let result = R::result(&mut c.module);
                 let mut st = FnState::new(&fn_name::<K>(name));
@@ -149,7 +198,6 @@ pub fn function<K: 'static + ?Sized, P: Params, R: Return>(
                 let func = c.fns.pop().expect("helper function").finish();
                 let h = c.module.functions.append(func, Span::UNDEFINED);
                 c.fn_cache.insert(key, h);
-                c.in_progress.remove(&key);
                 h
             })
         }

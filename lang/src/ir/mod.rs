@@ -13,7 +13,7 @@ pub mod types;
 pub mod val;
 
 pub use control::{diverged, if_else, BranchValue, and, break_, continue_, discard, for_range, for_range_rev, if_, if_value, loop_, or, return_, return_value, while_};
-pub use function::function;
+pub use function::{function, inlined};
 pub use kernel::{build_kernel, builtin, place, Buffer, BuiltKernel, Uniform, Workgroup, LENGTHS_BINDING};
 pub use ops::{cast, eq, ge, gt, le, lt, ne};
 pub use types::{storage_element_ok, struct_type, ConstValue, GpuType, HostRepr, MemberDesc, ScalarType};
