@@ -154,6 +154,21 @@ pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
         .map(|t| t.ident.clone())
         .collect();
     let key = quote!(__Key<#(#tps),*>);
+    // Uniformity inside the helper (value parameters taken as uniform: the caller's check
+    // covers them; references as memory), and what its callers must know: whether it, or
+    // a helper it calls, waits at a barrier or group operation.
+    let mut up = crate::uniformity::Params::default();
+    for arg in &f.sig.inputs {
+        if let FnArg::Typed(pt) = arg {
+            if let Pat::Ident(i) = &*pt.pat {
+                let set = if matches!(&*pt.ty, Type::Reference(_)) { &mut up.memory } else { &mut up.uniform };
+                set.insert(i.ident.to_string());
+            }
+        }
+    }
+    up.generics = tps.iter().map(|t| t.to_string()).collect();
+    let calls = crate::uniformity::check(&f.block, &up)?;
+    let (uniform_call_checks, needs_uniform) = crate::uniformity::call_checks(&calls, Some(&f.sig.ident));
     let (s, body) = ir_body(&f.sig, &f.block, key, &[], &f.sig.ident.to_string())?;
     crate::host::host_block(&mut f.block);
     let name = &f.sig.ident;
@@ -171,6 +186,10 @@ pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
             use super::*;
             #[doc(hidden)]
             pub struct __Key #generics (::core::marker::PhantomData<fn() -> (#(#tps,)*)>);
+            /// Whether the helper, or a helper it calls, waits at a workgroup barrier or
+            /// group operation: then every invocation of the group must call it.
+            pub const NEEDS_UNIFORM: bool = #needs_uniform;
+            #(#uniform_call_checks)*
             /// The IR version of the helper, called from rewritten kernel code.
             pub fn ir #generics (#(#params),*) -> #ret #wh {
                 #body

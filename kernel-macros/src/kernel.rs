@@ -224,7 +224,9 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             }
         }
     }
-    uniformity::check(&f.block, &up)?;
+    up.generics = f.sig.generics.type_params().map(|t| t.ident.to_string()).collect();
+    let calls = uniformity::check(&f.block, &up)?;
+    let (uniform_call_checks, _) = uniformity::call_checks(&calls, None);
     uniformity::check_grid_closures(&f.block, &up, &all_names)?;
 
     let mut rw = Rewriter::new();
@@ -364,6 +366,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             };
 
             #(#layout_checks)*
+            #(#uniform_call_checks)*
 
             #[doc(hidden)]
             pub struct __Key #generics (::core::marker::PhantomData<fn() -> (#(#type_params,)*)>);

@@ -25,6 +25,11 @@ pub enum Bind {
 }
 
 /// Types whose associated functions (`Vec3::new`, `f32::from_bits`) map to `Val<T>`'s.
+/// Whether `name` is one of the types whose methods calls become `Val` methods.
+pub fn is_builtin_type(name: &str) -> bool {
+    BUILTIN_TYPES.contains(&name)
+}
+
 const BUILTIN_TYPES: &[&str] = &[
     "f32", "u32", "i32", "usize", "bool", "Vec2", "Vec3", "Vec4", "UVec2", "UVec3", "UVec4", "IVec2",
     "IVec3", "IVec4", "Mat3", "Mat4",

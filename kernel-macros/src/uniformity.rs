@@ -36,6 +36,43 @@ pub struct Params {
     /// Names of storage-buffer and workgroup-memory parameters: a call given one may read
     /// memory or use atomics, so its result is non-uniform.
     pub memory: HashSet<String>,
+    /// The function's generic type parameters (`T::f` calls are not helper calls here).
+    pub generics: HashSet<String>,
+}
+
+/// What the check found besides errors: the helper calls of the body, for the compile-time
+/// checks that follow uniformity into helpers (each `#[kernel_fn]` module has a
+/// `NEEDS_UNIFORM` constant: it, or a helper it calls, waits at a barrier or group operation).
+#[derive(Default)]
+pub struct Calls {
+    /// Every call of a helper or intrinsic (`path::f(..)`), as its path.
+    pub all: Vec<syn::Path>,
+    /// Those made under non-uniform control flow or inside a `group_share` closure: the
+    /// callee must not need uniform control.
+    pub guarded: Vec<syn::Path>,
+}
+
+/// The helper (or intrinsic) a call goes to, when it is a free function with a module of
+/// its own (`f(..)`, `path::f(..)`): not `Type::f`, `Self::f`, `T::f` or `<T as Tr>::f`.
+fn helper_path(c: &syn::ExprCall, generics: &HashSet<String>) -> Option<syn::Path> {
+    let Expr::Path(fp) = &*c.func else { return None };
+    if fp.qself.is_some() {
+        return None;
+    }
+    let segs = &fp.path.segments;
+    if segs.len() >= 2 {
+        let ty = segs[segs.len() - 2].ident.to_string();
+        let first = segs[0].ident.to_string();
+        let lower = ty.chars().next().is_some_and(|ch| ch.is_lowercase()) && !crate::rewrite::is_builtin_type(&ty);
+        if !lower || first == "Self" || generics.contains(&first) {
+            return None;
+        }
+    }
+    let mut p = fp.path.clone();
+    if let Some(last) = p.segments.last_mut() {
+        last.arguments = syn::PathArguments::None;
+    }
+    Some(p)
 }
 
 pub fn uniform_builtin(name: &str) -> bool {
@@ -68,6 +105,7 @@ struct Walker<'a> {
     first_exit: Option<syn::Error>,
     /// Inside the closure of a `group_share` (run by the group's leader only).
     in_share: bool,
+    calls: Calls,
 }
 
 fn call_name(e: &Expr) -> Option<String> {
@@ -199,6 +237,7 @@ impl Walker<'_> {
             check: false,
             first_exit: None,
             in_share: self.in_share,
+            calls: Calls::default(),
         };
         probe.block(body);
         probe.first_exit
@@ -309,11 +348,21 @@ impl Walker<'_> {
             }
             Expr::Call(c) => {
                 let name = call_name(e).unwrap_or_default();
-                if SYNC_CALLS.contains(&name.as_str()) {
+                let sync = SYNC_CALLS.contains(&name.as_str());
+                if sync {
                     if self.in_share {
                         self.fail_in_share(call_site(c), &format!("{name}()"));
                     } else if let Some(why) = self.control() {
                         self.fail(call_site(c), &format!("{name}()"), why);
+                    }
+                }
+                if self.check {
+                    if let Some(p) = helper_path(c, &self.params.generics) {
+                        // The synchronising intrinsics are checked above, with notes.
+                        if !sync && (self.in_share || self.control().is_some()) {
+                            self.calls.guarded.push(p.clone());
+                        }
+                        self.calls.all.push(p);
                     }
                 }
                 let mut all = true;
@@ -482,8 +531,9 @@ fn assigned_var(e: &Expr) -> Option<String> {
     root_name(e)
 }
 
-/// Checks a kernel body. `params` says which parameter names are uniform.
-pub fn check(body: &Block, params: &Params) -> syn::Result<()> {
+/// Checks a kernel body. `params` says which parameter names are uniform. Returns the
+/// helper calls found (see [`Calls`]).
+pub fn check(body: &Block, params: &Params) -> syn::Result<Calls> {
     let mut nonuniform_vars = HashSet::new();
     // Iterate to a fixed point: a `let mut` found non-uniform can make others so.
     for _ in 0..16 {
@@ -499,6 +549,7 @@ pub fn check(body: &Block, params: &Params) -> syn::Result<()> {
             check: false,
             first_exit: None,
             in_share: false,
+            calls: Calls::default(),
         };
         w.block(body);
         let changed = w.changed;
@@ -519,12 +570,37 @@ pub fn check(body: &Block, params: &Params) -> syn::Result<()> {
         check: true,
         first_exit: None,
         in_share: false,
+        calls: Calls::default(),
     };
     w.block(body);
     match w.error {
         Some(e) => Err(e),
-        None => Ok(()),
+        None => Ok(w.calls),
     }
+}
+
+/// The compile-time checks of a body's helper calls: a helper called under non-uniform
+/// control must not need uniform control (error at the call), and the body's own
+/// `NEEDS_UNIFORM` (for a helper: whether any helper or intrinsic it calls does).
+pub fn call_checks(calls: &Calls, own_name: Option<&syn::Ident>) -> (Vec<TokenStream>, TokenStream) {
+    use quote::quote_spanned;
+    use syn::spanned::Spanned;
+    let asserts = calls
+        .guarded
+        .iter()
+        .map(|p| {
+            let name = p.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
+            let msg = format!(
+                "`{name}` waits at a workgroup barrier or group operation (itself or a helper it calls), so every invocation of the group must call it, but this call is under control flow that depends on a non-uniform value (or inside a `group_share` closure): call it where all invocations do"
+            );
+            quote_spanned! {p.span()=> const _: () = ::core::assert!(!#p::NEEDS_UNIFORM, #msg); }
+        })
+        .collect();
+    // A helper's call of itself is refused elsewhere; here it would be a constant cycle.
+    let is_self = |p: &&syn::Path| p.segments.len() == 1 && own_name.is_some_and(|n| p.segments[0].ident == *n);
+    let callees = calls.all.iter().filter(|p| !is_self(p)).map(|p| quote::quote!(#p::NEEDS_UNIFORM));
+    let needs = quote::quote!(false #(|| #callees)*);
+    (asserts, needs)
 }
 
 /// Checks that a `group_share` closure reads only its group index, uniform parameters

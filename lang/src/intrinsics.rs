@@ -15,6 +15,9 @@ use naga::{Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement
 
 pub fn workgroup_barrier() {}
 pub mod workgroup_barrier {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
         super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::WORK_GROUP)));
     }
@@ -23,6 +26,9 @@ pub mod workgroup_barrier {
 /// Makes storage-buffer writes of the workgroup visible to the workgroup.
 pub fn storage_barrier() {}
 pub mod storage_barrier {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
         super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::STORAGE)));
     }
@@ -30,6 +36,9 @@ pub mod storage_barrier {
 
 pub fn subgroup_barrier() {}
 pub mod subgroup_barrier {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
         super::with(|c| {
             c.uses_subgroups = true;
@@ -45,6 +54,9 @@ pub fn workgroup_uniform_load<T: Copy>(p: &T) -> T {
     *p
 }
 pub mod workgroup_uniform_load {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir<T: super::GpuType>(p: super::Place<T>) -> super::Val<T> {
         super::with(|c| {
             let ty = T::naga_type(&mut c.module);
@@ -60,6 +72,9 @@ pub fn group_share<T>(leader: impl FnOnce(u32) -> T) -> T {
     leader(crate::host::current_group())
 }
 pub mod group_share {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir<T: super::GpuType>(leader: impl FnOnce(super::Val<u32>) -> super::Val<T>) -> super::Val<T> {
         crate::ir::group::group_share(leader)
     }
@@ -75,6 +90,9 @@ pub fn group_any(p: bool) -> bool {
     p
 }
 pub mod group_any {
+    /// Whether a call must be reached by every invocation of its group (checked at the
+    /// calls of helpers that make it, docs/LANGUAGE.md section 11).
+    pub const NEEDS_UNIFORM: bool = true;
     pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
         crate::ir::group::group_any(p)
     }
@@ -108,6 +126,8 @@ macro_rules! collective {
             ($host)(x)
         }
         pub mod $name {
+            #[doc(hidden)]
+            pub const NEEDS_UNIFORM: bool = false;
             #[allow(unused_imports)]
             use super::{Co, So};
             pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
@@ -126,6 +146,8 @@ pub fn subgroup_any(p: bool) -> bool {
     p
 }
 pub mod subgroup_any {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
         super::subgroup_op(super::So::Any, super::Co::Reduce, p)
     }
@@ -134,6 +156,8 @@ pub fn subgroup_all(p: bool) -> bool {
     p
 }
 pub mod subgroup_all {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
         super::subgroup_op(super::So::All, super::Co::Reduce, p)
     }
@@ -144,6 +168,8 @@ pub fn subgroup_ballot(p: bool) -> UVec4 {
     UVec4::new(p as u32, 0, 0, 0)
 }
 pub mod subgroup_ballot {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<glam::UVec4> {
         super::with(|c| {
             c.uses_subgroups = true;
@@ -159,6 +185,8 @@ pub fn subgroup_broadcast<T: Copy>(x: T, _lane: u32) -> T {
     x
 }
 pub mod subgroup_broadcast {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
         super::subgroup_gather(super::GatherMode::Broadcast(lane.h), x)
     }
@@ -168,6 +196,8 @@ pub fn subgroup_broadcast_first<T: Copy>(x: T) -> T {
     x
 }
 pub mod subgroup_broadcast_first {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
         super::subgroup_gather(super::GatherMode::BroadcastFirst, x)
     }
@@ -177,6 +207,8 @@ pub fn subgroup_shuffle<T: Copy>(x: T, _lane: u32) -> T {
     x
 }
 pub mod subgroup_shuffle {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
         super::subgroup_gather(super::GatherMode::Shuffle(lane.h), x)
     }
@@ -190,6 +222,8 @@ pub fn atomic_compare_exchange(a: &AtomicU32, current: u32, new: u32) -> u32 {
     }
 }
 pub mod atomic_compare_exchange {
+    #[doc(hidden)]
+    pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(a: super::Place<super::AtomicU32>, current: super::Val<u32>, new: super::Val<u32>) -> super::Val<u32> {
         super::atomic_cmpxchg(a.ptr, naga::Scalar::U32, current.h, new.h)
     }
