@@ -37,6 +37,8 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
     let mut shareable = Vec::new();
     let mut checks = Vec::new();
     let mut index_arms = Vec::new();
+    let mut uniform_checks = Vec::new();
+    let mut prev: Option<(&syn::Ident, &syn::Type)> = None;
     for (i, f) in fields.named.iter().enumerate() {
         let fname = f.ident.as_ref().unwrap();
         let flit = fname.to_string();
@@ -70,6 +72,24 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
             ::core::assert!(!<#ty as ::cohort::ir::GpuType>::HOST_SHAREABLE || ::core::mem::size_of::<#ty>() == <#ty as ::cohort::ir::GpuType>::GPU_SIZE, #size_msg);
         });
         index_arms.push(quote! { if offset == ::core::mem::offset_of!(#name, #fname) { return ::core::option::Option::Some(#i); } });
+        // WGSL's uniform layout, checked where a kernel takes the struct as `&T`.
+        let inner_msg = format!("GpuType `{name_lit}`: field `{flit}` cannot be in a uniform: it holds an array whose elements are not 16 bytes apart (WGSL's uniform layout); use [Vec4; N] / [UVec4; N], or pass the data in a storage buffer (&[{name_lit}])");
+        let struct_msg = format!("GpuType `{name_lit}`: field `{flit}` is a struct, which in a uniform must start at a multiple of 16 bytes (WGSL's uniform layout); add padding before it");
+        uniform_checks.push(quote! {
+            if <#ty as ::cohort::ir::GpuType>::UNIFORM_PROBLEM.is_some() { return ::core::option::Option::Some(#inner_msg); }
+            if <#ty as ::cohort::ir::GpuType>::IS_STRUCT && ::core::mem::offset_of!(#name, #fname) % 16 != 0 { return ::core::option::Option::Some(#struct_msg); }
+        });
+        if let Some((pname, pty)) = prev {
+            let after_msg = format!("GpuType `{name_lit}`: field `{flit}` follows the struct field `{pname}` too closely for a uniform (WGSL rounds a struct member's size up to 16 bytes there); add padding before it");
+            uniform_checks.push(quote! {
+                if <#pty as ::cohort::ir::GpuType>::IS_STRUCT
+                    && ::core::mem::offset_of!(#name, #fname) < ::core::mem::offset_of!(#name, #pname) + (::core::mem::size_of::<#pty>() + 15) / 16 * 16
+                {
+                    return ::core::option::Option::Some(#after_msg);
+                }
+            });
+        }
+        prev = Some((fname, ty));
     }
     let size_msg = format!(
         "GpuType `{name_lit}`: its size is not a multiple of its GPU alignment (the largest field alignment); add padding fields at the end"
@@ -89,6 +109,14 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
             const GPU_ALIGN: usize = { let mut a = 1usize; #( if #aligns > a { a = #aligns; } )* a };
             const GPU_SIZE: usize = ::core::mem::size_of::<#name>();
             const HOST_SHAREABLE: bool = true #(&& #shareable)*;
+            const IS_STRUCT: bool = true;
+            const UNIFORM_PROBLEM: ::core::option::Option<&'static str> = {
+                const fn problem() -> ::core::option::Option<&'static str> {
+                    #(#uniform_checks)*
+                    ::core::option::Option::None
+                }
+                problem()
+            };
             fn member_index(offset: usize) -> ::core::option::Option<u32> {
                 #(#index_arms)*
                 ::core::option::Option::None

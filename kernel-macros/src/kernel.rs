@@ -273,6 +273,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 launch_args.push(quote! { #name.arg() });
             }
             ParamKind::Uniform(t) => {
+                if !mentions_any(t, &rw.generics) {
+                    let tspan = t.span();
+                    layout_checks.push(quote_spanned! {tspan=> const _: () = ::cohort::ir::assert_uniform::<#t>(); });
+                }
                 decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Uniform::<#t>::declare(#lit); });
                 rw.bind(&lit, Bind::Root);
                 launch_names.push(name.clone());

@@ -354,6 +354,11 @@ impl<T> Clone for Uniform<T> {
 impl<T> Copy for Uniform<T> {}
 impl<T: GpuType> Uniform<T> {
     pub fn declare(name: &str) -> Uniform<T> {
+        // Where the macro could not check at compile time (a generic parameter's type):
+        // the user's error, reported when the kernel is built, not a validation failure.
+        if let Some(why) = T::UNIFORM_PROBLEM {
+            with(|c| c.unsupported.push(format!("uniform `{name}`: {why}")));
+        }
         let ty = with(|c| T::naga_type(&mut c.module));
         Uniform { g: add_global(name, AddressSpace::Uniform, ty, Some(BindingKind::Uniform)), _t: PhantomData }
     }

@@ -16,5 +16,5 @@ pub use control::{diverged, if_else, BranchValue, and, break_, continue_, discar
 pub use function::{function, inlined};
 pub use kernel::{build_kernel, builtin, place, Buffer, BuiltKernel, Uniform, Workgroup, LENGTHS_BINDING};
 pub use ops::{cast, eq, ge, gt, le, lt, ne};
-pub use types::{storage_element_ok, struct_type, ConstValue, GpuType, HostRepr, MemberDesc, ScalarType};
+pub use types::{assert_uniform, storage_element_ok, struct_type, ConstValue, GpuType, HostRepr, MemberDesc, ScalarType};
 pub use val::{array, array_repeat, compose, field, field_init, index, konst, lit, name, place_field, place_index, zero, AsPlace, AutoDeref, FieldInit, ToVal, Place, RtArray, Val, Var};

@@ -24,6 +24,12 @@ pub unsafe trait GpuType: 'static + Sized {
     const GPU_SIZE: usize;
     /// True when a host value has exactly the GPU layout (so it can be uploaded as bytes).
     const HOST_SHAREABLE: bool;
+    /// Why a value of this type cannot be a uniform (`&T` parameter), if it cannot: WGSL's
+    /// uniform layout needs array strides and struct members of struct type at multiples
+    /// of 16 bytes, where the storage layout (which the host layout follows) does not.
+    const UNIFORM_PROBLEM: Option<&'static str> = None;
+    /// A `#[derive(GpuType)]` struct (its members in a uniform start at multiples of 16).
+    const IS_STRUCT: bool = false;
     /// Index of the struct member / vector component / matrix column that starts at byte
     /// `offset` of the host value.
     fn member_index(offset: usize) -> Option<u32> {
@@ -202,6 +208,20 @@ unsafe impl<T: GpuType, const N: usize> GpuType for [T; N] {
     const GPU_ALIGN: usize = T::GPU_ALIGN;
     const GPU_SIZE: usize = round_up(T::GPU_SIZE, T::GPU_ALIGN) * N;
     const HOST_SHAREABLE: bool = T::HOST_SHAREABLE && std::mem::size_of::<T>() == round_up(T::GPU_SIZE, T::GPU_ALIGN);
+    const UNIFORM_PROBLEM: Option<&'static str> = if round_up(T::GPU_SIZE, T::GPU_ALIGN) % 16 != 0 {
+        Some("an array whose elements are not 16 bytes apart cannot be in a uniform (WGSL's uniform layout needs a 16-byte array stride): use an array of Vec4 / UVec4 / IVec4, or pass the data in a storage buffer (&[T])")
+    } else {
+        T::UNIFORM_PROBLEM
+    };
+}
+
+/// Panics (at compile time, where the kernel macro evaluates it for a uniform parameter)
+/// with the reason `T` cannot be a uniform.
+#[doc(hidden)]
+pub const fn assert_uniform<T: GpuType>() {
+    if let Some(why) = T::UNIFORM_PROBLEM {
+        panic!("{}", why);
+    }
 }
 
 impl<T: ConstValue, const N: usize> ConstValue for [T; N] {
