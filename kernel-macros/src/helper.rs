@@ -145,6 +145,7 @@ fn static_where(generics: &syn::Generics) -> TokenStream {
 }
 
 pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
+    crate::types_check::check(&f)?;
     // Expanded anyway, so that callers see the helper and the refusal is the only error.
     let refusal = refuse_self_call(&f).err().map(|e| e.to_compile_error());
     let tps: Vec<_> = f

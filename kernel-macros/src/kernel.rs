@@ -185,6 +185,7 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
 }
 
 pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
+    crate::types_check::check(&f)?;
     let span = f.sig.ident.span();
     if let Some(r) = match &f.sig.output {
         syn::ReturnType::Type(_, t) => Some(t),

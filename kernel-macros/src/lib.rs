@@ -15,6 +15,7 @@ mod helper;
 mod host;
 mod kernel;
 mod rewrite;
+mod types_check;
 mod uniformity;
 
 fn out(r: syn::Result<proc_macro2::TokenStream>) -> TokenStream {
