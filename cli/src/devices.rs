@@ -52,10 +52,16 @@ pub fn list() -> Result<(), String> {
                 for (i, d) in devices.iter().enumerate() {
                     let info = d.info();
                     println!(
-                        "{:<7} {i}  {} ({})",
+                        "{:<7} {i}  {} ({}){}",
                         kind.name(),
                         info.adapter_name,
-                        info.driver
+                        info.driver,
+                        match (info.f32_subnormals, info.f32_nan_inf) {
+                            (true, true) => ", f32 subnormals and NaN kept",
+                            (true, false) => ", f32 subnormals kept (NaN may be folded)",
+                            (false, true) => ", f32 NaN kept (subnormals flushed to zero)",
+                            (false, false) => "",
+                        }
                     );
                 }
             }

@@ -32,6 +32,13 @@ pub struct DeviceInfo {
     /// The largest workgroup count valid in every dimension (some drivers allow more in x).
     pub max_workgroups_per_dim: u32,
     pub max_storage_buffer_binding_size: u64,
+    /// Whether kernels keep f32 subnormals (not flushed to zero): the Vulkan backend on
+    /// devices with `shaderDenormPreserveFloat32` (docs/LANGUAGE.md, section 4).
+    pub f32_subnormals: bool,
+    /// Whether kernels keep f32 NaN, infinities and signed zeros as IEEE defines them
+    /// (not folded away, e.g. a NaN-propagating select turned into `fmax`): the Vulkan
+    /// backend on devices with `shaderSignedZeroInfNanPreserveFloat32`.
+    pub f32_nan_inf: bool,
 }
 
 /// Device limits the host-side checks need; filled by each backend from its own API.

@@ -17,6 +17,7 @@ mod buffer;
 mod device;
 mod disk_cache;
 mod error;
+mod float_controls;
 mod pipeline_cache;
 mod timing;
 mod vulkan_backend;

@@ -461,6 +461,13 @@ impl VkDevice {
                 "the artifact has no SPIR-V code (missing magic number)".into(),
             ));
         }
+        // Subnormals, NaN, infinities and signed zeros kept as IEEE (and Rust) define them,
+        // where the device can: the driver may otherwise flush and fold them.
+        let code = crate::float_controls::preserve_f32(
+            &kernel.spirv,
+            self.info.f32_subnormals,
+            self.info.f32_nan_inf,
+        );
         let entry = CString::new(kernel.entry_point.as_str())
             .map_err(|_| fail("the entry point name contains a NUL byte".into()))?;
         let required = self.required_subgroup_size(kernel)?;
@@ -487,7 +494,7 @@ impl VkDevice {
         let result = (|| unsafe {
             module = device
                 .create_shader_module(
-                    &vk::ShaderModuleCreateInfo::default().code(&kernel.spirv),
+                    &vk::ShaderModuleCreateInfo::default().code(&code),
                     None,
                 )
                 .map_err(|e| fail(format!("vkCreateShaderModule failed: {e}")))?;

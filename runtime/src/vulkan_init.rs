@@ -364,6 +364,7 @@ fn open_device(
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut sgc_props = vk::PhysicalDeviceSubgroupSizeControlProperties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut float_controls = vk::PhysicalDeviceFloatControlsProperties::default();
     {
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
         if is_13 || sgc_ext {
@@ -371,6 +372,7 @@ fn open_device(
         }
         if is_12 {
             props2 = props2.push_next(&mut driver);
+            props2 = props2.push_next(&mut float_controls);
         }
         unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     }
@@ -510,6 +512,10 @@ fn open_device(
             .min()
             .unwrap_or(0),
         max_storage_buffer_binding_size: l.max_storage_buffer_range as u64,
+        // Float controls are core in Vulkan 1.2 (SPIR-V 1.3 modules name the extension).
+        f32_subnormals: is_12 && float_controls.shader_denorm_preserve_float32 == vk::TRUE,
+        f32_nan_inf: is_12
+            && float_controls.shader_signed_zero_inf_nan_preserve_float32 == vk::TRUE,
     };
     let limits = Limits {
         max_workgroups: l.max_compute_work_group_count,

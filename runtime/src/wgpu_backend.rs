@@ -164,6 +164,10 @@ impl WgpuDevice {
             timestamps,
             max_workgroups_per_dim: l.max_compute_workgroups_per_dimension,
             max_storage_buffer_binding_size: l.max_storage_buffer_binding_size,
+            // wgpu compiles WGSL itself and cannot request float controls: the driver's
+            // defaults apply (lavapipe keeps IEEE behaviour; NVIDIA flushes subnormals).
+            f32_subnormals: false,
+            f32_nan_inf: false,
         };
         let limits = Limits {
             max_workgroups: [l.max_compute_workgroups_per_dimension; 3],
