@@ -14,6 +14,7 @@ use cohort_render::{
 };
 use cohort_scenes::embedded;
 
+mod compare;
 mod devices;
 mod figures;
 mod merge;
@@ -39,6 +40,8 @@ enum Command {
     Figures(figures::FiguresArgs),
     /// Merge the EXRs of a render's shards (`render --shard K/N`) into one image.
     Merge(merge::MergeArgs),
+    /// Compare two EXRs: the same image, bit for bit or within float summation order?
+    Compare(compare::CompareArgs),
     /// List the usable devices of each backend, by the index `--devices` takes.
     Devices,
 }
@@ -171,6 +174,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render(a),
         Command::Figures(a) => figures::run(a),
         Command::Merge(a) => merge::run(a),
+        Command::Compare(a) => compare::run(a),
         Command::Devices => devices::list(),
     };
     match result {

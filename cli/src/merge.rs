@@ -26,6 +26,9 @@ pub struct MergeArgs {
     /// Exposure of the PNG, in stops.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
+    /// Fail, rather than warn, when shards of the split are missing (for pipelines).
+    #[arg(long)]
+    require_all: bool,
 }
 
 /// A file to merge: its image and what its header says.
@@ -78,6 +81,12 @@ pub fn run(a: MergeArgs) -> Result<(), String> {
         indices: owner.keys().copied().collect(),
         count: first.provenance.shards.count,
     };
+    if !shards.is_complete() && a.require_all {
+        return Err(format!(
+            "shards {} are missing (the inputs hold {shards}) and --require-all is given",
+            shards.missing()
+        ));
+    }
     if !shards.is_complete() {
         eprintln!(
             "warning: merging shards {shards} without {}: the image has only the paths of the shards present{}",

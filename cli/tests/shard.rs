@@ -1,7 +1,8 @@
 //! Scaling out from the command line: `cohort render --shard K/N` writes EXRs that
 //! `cohort merge` combines into the unsplit render (through the files: path counts and
 //! the header's provenance), `cohort merge` refuses files that do not belong together,
-//! and `--devices` renders on every device of the machine (one here) as a plain run does.
+//! `cohort compare` tells the merge from anything else, and `--devices` renders on
+//! every device of the machine (one here) as a plain run does.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -74,6 +75,16 @@ fn fails(out: Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
+fn compare(dir: &Path, a: &str, b: &str, extra: &[&str]) -> Output {
+    cohort()
+        .arg("compare")
+        .arg(dir.join(a))
+        .arg(dir.join(b))
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 fn merge(dir: &Path, inputs: &[&str], out: &str) -> Output {
     cohort()
         .arg("merge")
@@ -129,6 +140,9 @@ fn merged_shard_files_are_the_unsplit_render() {
                 merged.attributes["cohort.shards"],
                 format!("0-{}/{n}", n - 1).replace("0-0/1", "0/1")
             );
+            // `cohort compare` (what the cluster smoke test runs) agrees.
+            let text = ok(compare(&dir, &merged_name, &whole_name, &[]));
+            assert!(text.contains("same image"), "{text}");
             let tol = if n == 1 { 0.0 } else { merge_tolerance(PATHS) };
             for (i, (a, b)) in merged
                 .image
@@ -196,7 +210,23 @@ fn merge_refuses_files_that_do_not_belong_together() {
         "a refused merge writes nothing"
     );
 
-    // A subset merges, with a warning naming what is missing; merges merge again.
+    // A subset merges, with a warning naming what is missing, unless --require-all
+    // (the cluster recipes' merge step) makes it an error; merges merge again.
+    let mut require_all = cohort();
+    require_all
+        .args(["merge", "--require-all"])
+        .args(["s0.exr", "s2.exr"].map(|i| dir.join(i)))
+        .arg("--out")
+        .arg(dir.join("x.exr"));
+    let err = fails(require_all.output().unwrap());
+    assert!(
+        err.contains("shards 1/3 are missing") && err.contains("--require-all"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("x.exr").exists(),
+        "a refused merge writes nothing"
+    );
     let text = ok(merge(&dir, &["s0.exr", "s2.exr"], "part.exr"));
     assert!(
         text.contains("warning") && text.contains("without 1/3"),
@@ -206,6 +236,36 @@ fn merge_refuses_files_that_do_not_belong_together() {
     let all = read_exr(&dir.join("all.exr")).unwrap();
     assert_eq!(all.attributes["cohort.shards"], "0-2/3");
     assert!(all.image.paths.iter().all(|&p| p == PATHS));
+
+    // `cohort compare` fails on a partial merge (its path counts differ), on another
+    // seed's image (beyond float summation order), and on images of different sizes;
+    // an explicit --tolerance loose enough for the noise lets the seeds pass.
+    ok(render(&dir, "whole.exr", &[]));
+    ok(render(&dir, "whole2.exr", &["--seed", "2"]));
+    let text = ok(compare(&dir, "all.exr", "whole.exr", &[]));
+    assert!(text.contains("same image"), "{text}");
+    let err = fails(compare(&dir, "part.exr", "whole.exr", &[]));
+    assert!(err.contains("path counts differ"), "{err}");
+    let err = fails(compare(&dir, "whole2.exr", "whole.exr", &[]));
+    assert!(err.contains("differ: relative difference"), "{err}");
+    ok(compare(
+        &dir,
+        "whole2.exr",
+        "whole.exr",
+        &["--tolerance", "1e9"],
+    ));
+    ok(cohort()
+        .args(["render", "--width", "8", "--height", "8", "--paths", "1"])
+        .arg("--out")
+        .arg(dir.join("small.exr"))
+        .arg("--png")
+        .arg(dir.join("small.png"))
+        .output()
+        .unwrap());
+    let err = fails(compare(&dir, "small.exr", "whole.exr", &[]));
+    assert!(err.contains("is 8x8 but") && err.contains("20x16"), "{err}");
+    let err = fails(compare(&dir, "whole.exr", "nothing.exr", &[]));
+    assert!(err.contains("nothing.exr"), "{err}");
 }
 
 /// One device here: `--devices all` (and `--devices 0`) render what a plain run does,
