@@ -14,7 +14,6 @@ pub mod multi_device;
 pub mod output;
 pub mod provenance;
 pub mod renderer;
-pub mod roulette;
 pub mod shard;
 
 pub use gpu_scene::GpuScene;
@@ -23,5 +22,4 @@ pub use renderer::{
     Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
     HostTimes, RenderStats, Renderer,
 };
-pub use roulette::Roulette;
 pub use shard::Shard;
