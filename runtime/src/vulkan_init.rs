@@ -496,6 +496,7 @@ fn open_device(
         .supported_stages
         .contains(vk::ShaderStageFlags::COMPUTE);
     let timestamps = c.timestamp_valid_bits > 0 && l.timestamp_period > 0.0;
+    let software = driver.driver_id == vk::DriverId::MESA_LLVMPIPE;
     let info = DeviceInfo {
         backend: BACKEND,
         adapter_name: name,
@@ -513,8 +514,14 @@ fn open_device(
             .unwrap_or(0),
         max_storage_buffer_binding_size: l.max_storage_buffer_range as u64,
         // Float controls are core in Vulkan 1.2 (SPIR-V 1.3 modules name the extension).
-        f32_subnormals: is_12 && float_controls.shader_denorm_preserve_float32 == vk::TRUE,
+        // The software driver keeps IEEE behaviour unasked (the conformance suite is exact
+        // there); asking would only change its optimisations and make its Vulkan images
+        // differ from its wgpu ones in the last bits.
+        f32_subnormals: is_12
+            && !software
+            && float_controls.shader_denorm_preserve_float32 == vk::TRUE,
         f32_nan_inf: is_12
+            && !software
             && float_controls.shader_signed_zero_inf_nan_preserve_float32 == vk::TRUE,
     };
     let limits = Limits {
