@@ -195,10 +195,11 @@ fn broken_scenes_fail_cleanly() {
             ],
         ),
         (
-            scene_file(&dir, "point.xml", r#"<emitter type="point"/>"#),
+            // A plugin Mitsuba has and the renderer does not (point lights are supported).
+            scene_file(&dir, "projector.xml", r#"<emitter type="projector"/>"#),
             vec![
-                "point.xml:4",
-                "emitter 'point'",
+                "projector.xml:4",
+                "emitter 'projector'",
                 "use --lenient to render without it",
             ],
         ),
@@ -340,7 +341,7 @@ fn lenient_renders_what_strict_refuses() {
     let scene = scene_file(
         &dir,
         "lenient.xml",
-        "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n<shape type=\"rectangle\"><bsdf type=\"plastic\"><rgb name=\"diffuse_reflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
+        "<emitter type=\"projector\"/>\n<shape type=\"rectangle\"><bsdf type=\"plastic\"><rgb name=\"diffuse_reflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
     );
     let (code, _, err) = render_scene(&dir, &scene, &[]);
     assert_eq!(code, 1, "{err}");
@@ -354,7 +355,7 @@ fn lenient_renders_what_strict_refuses() {
     let (code, _, err) = render_scene(&dir, &scene, &["--lenient"]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        err.contains("lenient.xml:4: warning: emitter 'point' is not supported"),
+        err.contains("lenient.xml:4: warning: emitter 'projector' is not supported"),
         "{err}"
     );
     assert!(
