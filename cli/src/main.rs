@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
 use cohort_render::provenance::Provenance;
 use cohort_render::{
-    output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer, Shard,
+    output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer, Roulette, Shard,
 };
 use cohort_scenes::embedded;
 
@@ -72,6 +72,12 @@ struct RenderArgs {
     /// groups only).
     #[arg(long, default_value = "path")]
     rr: String,
+    /// Which roulette decides when a path ends: `fixed` (the paper's constant continuation
+    /// 0.8 from the first bounce), `mitsuba` (Mitsuba's `path`: from the scene's rr_depth, by
+    /// throughput), or `auto`: mitsuba for Mitsuba XML scenes rendered with --rr path, fixed
+    /// otherwise (embedded scenes, the paper's group roulettes).
+    #[arg(long, default_value = "auto")]
+    roulette: String,
     /// Continuation probability of the whole-group-end roulette (`--rr whole`), in (0, 1].
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     end_continue: f32,
@@ -225,6 +231,14 @@ fn render(a: RenderArgs) -> Result<(), String> {
         "whole" => (true, Some(a.end_continue)),
         other => return Err(format!("unknown --rr `{other}` (path, group or whole)")),
     };
+    let roulette = match a.roulette.as_str() {
+        "auto" if a.rr == "path" && !embedded::names().contains(&a.scene.as_str()) => {
+            Roulette::Mitsuba
+        }
+        "auto" => Roulette::Fixed,
+        other => Roulette::parse(other)
+            .ok_or_else(|| format!("unknown --roulette `{other}` (auto, fixed or mitsuba)"))?,
+    };
     let integrator = IntegratorKind::parse(&a.integrator)
         .ok_or_else(|| format!("unknown --integrator `{}` (nee or path)", a.integrator))?;
     let budget = match (a.paths, a.time) {
@@ -279,11 +293,15 @@ fn render(a: RenderArgs) -> Result<(), String> {
         compact: a.compact,
         whole_group_end,
         integrator,
+        roulette,
         coherent_light: a.coherent_light,
         light_cells: a.light_cells,
         shard,
         ..Default::default()
     };
+    for w in cohort_render::roulette::warnings(&scene, &opts) {
+        eprintln!("warning: {w}");
+    }
     let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
     let device_names: Vec<String> = devices
         .iter()

@@ -9,7 +9,10 @@
 
 use crate::integrator::Integrator;
 use crate::layout::*;
-use crate::light::{area_to_solid_angle, mis_power, pick_light, shared_light_draw, triangle_point};
+use crate::light::{
+    area_to_solid_angle, delta_light_arrival, delta_light_direction, mis_power, pick_light,
+    shared_light_draw, triangle_point,
+};
 use crate::path_end::PathEnd;
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{
@@ -81,6 +84,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     tris: &[Triangle],
     materials: &[Material],
     lights: &[LightEntry],
+    delta_lights: &[DeltaLight],
     state: &mut [UVec4],
     ray_o: &mut [Vec4],
     ray_d: &mut [Vec4],
@@ -131,7 +135,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut alive = false;
     let mut pixel = 0u32;
     let mut path = 0u32;
-    let mut bounce = 0u32;
+    // The bounce of the path's next vertex: one more, except after a camera ray passed
+    // through an emitter that `hide_emitters` hides.
+    let mut next_bounce = 0u32;
     let mut thr = Vec3::ZERO;
     let mut l = Vec3::ZERO;
     let mut new_o = Vec3::ZERO;
@@ -157,7 +163,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             active = true;
             pixel = st.x;
             path = st.y;
-            bounce = st.z;
+            let bounce = st.z;
+            next_bounce = bounce + 1;
             let key = stream(f.seed, pixel, path, bounce + 1);
             let h = hits[r];
             let tri = h.w.to_bits();
@@ -167,7 +174,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             thr = b4.truncate();
             let r4 = radiance[r];
             l = r4.truncate();
-            if tri == MISS {
+            // Camera rays: Mitsuba's `hide_emitters` hides what they reach directly.
+            let hidden = f.hide_emitters != 0 && bounce == 0;
+            if f.zero_depth != 0 {
+                // Mitsuba's max_depth 0: the path ends with nothing (alive stays false).
+            } else if tri == MISS {
                 // A direction drawn from a non-delta BSDF (pdf in beta.w; 0 after a camera
                 // ray or a delta bounce) could also have been drawn by light sampling.
                 let mut w = 1.0f32;
@@ -176,19 +187,26 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         w = mis_power(b4.w, r4.w);
                     }
                 }
-                l += thr * f.environment * w;
+                if !hidden {
+                    l += thr * f.environment * w;
+                }
             } else {
                 let t = tris[tri as usize];
                 let m = materials[t.material as usize];
                 // A hit on a (numerically) degenerate triangle has no normal: shade it as
                 // facing the ray rather than let a NaN normal into the next ray.
                 let cr = (t.v1 - t.v0).cross(t.v2 - t.v0);
-                let ng = if cr.dot(cr) > 1.0e-30 { cr.normalize() } else { -d };
+                let ng = if cr.dot(cr) > 1.0e-30 {
+                    cr.normalize()
+                } else {
+                    -d
+                };
                 let front = ng.dot(d) < 0.0;
                 let two_sided = m.flags & TWO_SIDED != 0;
                 let n = if front { ng } else { -ng };
                 let p = ray_o[r].truncate() + d * h.x;
-                if m.flags & EMITTER != 0 && (front || two_sided) {
+                let pass_through = hidden && m.flags & EMITTER != 0;
+                if m.flags & EMITTER != 0 && (front || two_sided) && !hidden {
                     let mut w = 1.0f32;
                     if I::NEE {
                         if b4.w > 0.0 {
@@ -205,7 +223,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse || glossy) && room && (f.light_count > 0 || f.env_light > 0.0) {
+                    if (diffuse || glossy)
+                        && room
+                        && !pass_through
+                        && (f.light_count > 0 || f.env_light > 0.0)
+                    {
                         let mut ul = uniform(key, 6);
                         let mut up = Vec2::new(uniform(key, 7), uniform(key, 8));
                         if f.coherent_light != 0 {
@@ -216,6 +238,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         let mut wi = Vec3::ZERO;
                         let mut le = Vec3::ZERO;
                         let mut light_pdf = 0.0f32;
+                        // A delta light's sample has no density to weigh against BSDF
+                        // sampling (which never reaches it): its weight is 1 / selection.
+                        let mut delta_select = 0.0f32;
                         let mut tmax = 3.0e38f32;
                         if ul < f.env_light {
                             wi = crate::sampling::frame(n) * crate::sampling::cosine_hemisphere(up);
@@ -223,28 +248,40 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 f.env_light * wi.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;
                             le = f.environment;
                         } else {
-                            let lt = tris[pick_light(
+                            let id = pick_light(
                                 lights,
                                 f.light_count,
                                 (ul - f.env_light) / (1.0 - f.env_light),
-                            ) as usize];
-                            let lm = materials[lt.material as usize];
-                            let y = triangle_point(lt.v0, lt.v1, lt.v2, up);
-                            let to = y - o;
-                            let dist = to.length();
-                            if dist > 0.0 {
-                                wi = to / dist;
-                                let lng = (lt.v1 - lt.v0).cross(lt.v2 - lt.v0).normalize();
-                                let cos_l = lng.dot(wi);
-                                if cos_l < 0.0 || lm.flags & TWO_SIDED != 0 {
-                                    light_pdf = area_to_solid_angle(lt.light_pdf, dist, cos_l);
-                                    le = lm.emission;
-                                    // Stop short of the light's own surface.
-                                    tmax = dist * (1.0 - 1e-4);
+                            );
+                            if id & DELTA_LIGHT != 0 {
+                                let k = id & !DELTA_LIGHT;
+                                let dd = delta_light_direction(delta_lights, k, o);
+                                if dd.w > 0.0 {
+                                    wi = dd.truncate();
+                                    le = delta_light_arrival(delta_lights, k, wi, dd.w);
+                                    delta_select = delta_lights[k as usize].select;
+                                    tmax = dd.w * (1.0 - 1e-4);
+                                }
+                            } else {
+                                let lt = tris[id as usize];
+                                let lm = materials[lt.material as usize];
+                                let y = triangle_point(lt.v0, lt.v1, lt.v2, up);
+                                let to = y - o;
+                                let dist = to.length();
+                                if dist > 0.0 {
+                                    wi = to / dist;
+                                    let lng = (lt.v1 - lt.v0).cross(lt.v2 - lt.v0).normalize();
+                                    let cos_l = lng.dot(wi);
+                                    if cos_l < 0.0 || lm.flags & TWO_SIDED != 0 {
+                                        light_pdf = area_to_solid_angle(lt.light_pdf, dist, cos_l);
+                                        le = lm.emission;
+                                        // Stop short of the light's own surface.
+                                        tmax = dist * (1.0 - 1e-4);
+                                    }
                                 }
                             }
                         }
-                        if light_pdf > 0.0 {
+                        if light_pdf > 0.0 || delta_select > 0.0 {
                             // f·cos and the BSDF-sampling density of `wi`.
                             let fc: Vec3;
                             let pdf_b: f32;
@@ -258,13 +295,24 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 fc = m.color * e.x;
                                 pdf_b = e.y;
                             }
-                            ld = thr * fc * le * (mis_power(light_pdf, pdf_b) / light_pdf);
+                            let weight = if delta_select > 0.0 {
+                                1.0 / delta_select
+                            } else {
+                                mis_power(light_pdf, pdf_b) / light_pdf
+                            };
+                            ld = thr * fc * le * weight;
                             sh_o = o.extend(tmax);
                             sh_d = wi;
                         }
                     }
                 }
-                if diffuse {
+                if pass_through {
+                    // The camera ray goes on behind the hidden emitter, still a camera ray.
+                    new_d = d;
+                    new_o = offset_origin(p, -n);
+                    alive = true;
+                    next_bounce = bounce;
+                } else if diffuse {
                     let s = S::sample(n, u, shared_patch, f.patches_n);
                     new_d = s.truncate();
                     thr = thr * m.color * s.w;
@@ -318,16 +366,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                     alive = true;
                 }
-                if alive && f.max_depth != 0 && bounce + 1 >= f.max_depth {
+                if alive && !pass_through && f.max_depth != 0 && bounce + 1 >= f.max_depth {
                     alive = false;
                 }
-                if alive && bounce + 1 >= f.rr_depth {
+                if alive && !pass_through && bounce + 1 >= f.rr_depth {
                     let mut rr_u = uniform(key, 5);
                     if f.group_rr != 0 {
                         rr_u = shared_rr.x;
                     }
-                    if rr_u < f.rr_continue {
-                        thr = thr / f.rr_continue;
+                    // Mitsuba: keep path weights near one; never continue surely, so that
+                    // paths trapped by total internal reflection end.
+                    let mut q = f.rr_continue;
+                    if f.roulette_throughput != 0 {
+                        q = thr.max_element().min(0.95);
+                    }
+                    if rr_u < q {
+                        thr = thr / q;
                     } else {
                         alive = false;
                     }
@@ -350,7 +404,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             }
         }
         if alive {
-            state[r] = UVec4::new(pixel, path, bounce + 1, 0);
+            state[r] = UVec4::new(pixel, path, next_bounce, 0);
             ray_o[r] = new_o.extend(0.0);
             ray_d[r] = new_d.extend(0.0);
             beta[r] = thr.extend(bsdf_pdf);

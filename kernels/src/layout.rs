@@ -113,6 +113,17 @@ pub struct Frame {
     /// group draws.
     pub group_seed: u32,
     pub pad2: u32,
+    /// 1: Mitsuba's `hide_emitters`: camera rays pass through emitter surfaces and do not
+    /// see the environment.
+    pub hide_emitters: u32,
+    /// 1: Mitsuba's Russian roulette: from bounce `rr_depth` - 1 on, a path continues with
+    /// probability min(max component of its throughput, 0.95) (`rr_continue` unused);
+    /// 0: the paper's fixed continuation probability `rr_continue`.
+    pub roulette_throughput: u32,
+    /// 1: Mitsuba's `max_depth` 0: no path contributes anything (`max_depth` above is
+    /// 0 = unlimited).
+    pub zero_depth: u32,
+    pub pad3: u32,
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`
@@ -127,6 +138,43 @@ pub struct LightEntry {
     pub alias_tri: u32,
     pub prob: f32,
     pub pad: u32,
+}
+
+/// Bit of a light id (`LightEntry::tri`, `alias_tri`) that marks an entry of the delta-light
+/// table rather than a triangle.
+pub const DELTA_LIGHT: u32 = 0x8000_0000;
+/// `DeltaLight::kind`.
+pub const POINT_LIGHT: u32 = 0;
+pub const SPOT_LIGHT: u32 = 1;
+pub const DIRECTIONAL_LIGHT: u32 = 2;
+
+/// A light no ray can hit (Mitsuba `point`, `spot`, `directional`), reached only by
+/// next-event estimation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct DeltaLight {
+    /// Point and spot: where the light is.
+    pub position: Vec3,
+    pub kind: u32,
+    /// Point and spot: radiant intensity (W/sr); directional: irradiance (W/m^2).
+    pub intensity: Vec3,
+    /// Probability that next-event estimation picks this light.
+    pub select: f32,
+    /// Spot: rows of the inverse of the linear part of `to_world` (world -> the spot's
+    /// frame, whose +z is the axis), so that the falloff sees directions as Mitsuba does.
+    pub to_local_x: Vec3,
+    /// Spot: cosine of the cutoff angle (no light outside it).
+    pub cos_cutoff: f32,
+    pub to_local_y: Vec3,
+    /// Spot: cosine of the beam width (full intensity inside it).
+    pub cos_beam: f32,
+    pub to_local_z: Vec3,
+    /// Spot: the cutoff angle in radians.
+    pub cutoff: f32,
+    /// Directional: the direction the light travels (unit).
+    pub direction: Vec3,
+    /// Spot: 1 / (cutoff - beam width) in 1/radians (0 for a hard-edged spot).
+    pub inv_transition: f32,
 }
 
 /// `state.w` bits of a ray slot.

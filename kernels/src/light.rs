@@ -70,3 +70,52 @@ pub fn shared_light_draw(key: u32, cells: u32) -> Vec2 {
     let cell = crate::rng::hash(key ^ 0x1d87_2b41) % (cells * cells);
     Vec2::new(u, f32::from_bits(cell))
 }
+
+/// Direction from `o` towards delta light `k` (xyz, unit) and the distance to it (w; 3e38
+/// for a directional light, which is infinitely far). w = 0: `o` is at the light.
+#[kernel_fn]
+pub fn delta_light_direction(lights: &[DeltaLight], k: u32, o: Vec3) -> Vec4 {
+    let e = lights[k as usize];
+    let mut r = Vec4::ZERO;
+    if e.kind == DIRECTIONAL_LIGHT {
+        r = (-e.direction).extend(3.0e38);
+    } else {
+        let to = e.position - o;
+        let dist = to.length();
+        if dist > 0.0 {
+            r = (to / dist).extend(dist);
+        }
+    }
+    r
+}
+
+/// What delta light `k` delivers along `wi` (towards the light) from `dist` away: its
+/// irradiance (directional), or its intensity in direction -`wi` over the squared
+/// distance (point; spot, with Mitsuba's linear falloff in angle from the beam width to
+/// the cutoff).
+#[kernel_fn]
+pub fn delta_light_arrival(lights: &[DeltaLight], k: u32, wi: Vec3, dist: f32) -> Vec3 {
+    let e = lights[k as usize];
+    let mut r = e.intensity;
+    if e.kind != DIRECTIONAL_LIGHT {
+        let mut falloff = 1.0f32;
+        if e.kind == SPOT_LIGHT {
+            let d = -wi;
+            let local = Vec3::new(
+                e.to_local_x.dot(d),
+                e.to_local_y.dot(d),
+                e.to_local_z.dot(d),
+            );
+            let c = local.z / local.length();
+            if c > e.cos_cutoff {
+                if c < e.cos_beam {
+                    falloff = (e.cutoff - c.acos()) * e.inv_transition;
+                }
+            } else {
+                falloff = 0.0;
+            }
+        }
+        r = e.intensity * (falloff / (dist * dist));
+    }
+    r
+}

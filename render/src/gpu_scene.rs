@@ -2,7 +2,7 @@
 //! layouts of `cohort_kernels::layout` (byte-identical to `cohort-scenes`' GPU types).
 
 use cohort::runtime::{Device, GpuBuffer, RuntimeError};
-use cohort_kernels::layout::{BvhNode, LightEntry, Material, Triangle};
+use cohort_kernels::layout::{BvhNode, DeltaLight, LightEntry, Material, Triangle};
 use cohort_kernels::traverse_wide::WideNode;
 use cohort_scenes::{GpuBvh, GpuBvh8, Scene};
 
@@ -13,7 +13,9 @@ pub struct GpuScene {
     pub triangle_count: usize,
     /// Next-event estimation's alias table over the emitter triangles (`crate::lights`).
     pub lights: GpuBuffer<LightEntry>,
-    /// Entries of `lights` in use (0: no area light).
+    /// The point, spot and directional lights that entries of `lights` refer to.
+    pub delta_lights: GpuBuffer<DeltaLight>,
+    /// Entries of `lights` in use (0: no area or delta light).
     pub light_count: u32,
     /// Probability that a light sample goes to the environment.
     pub env_light: f32,
@@ -68,6 +70,7 @@ impl GpuScene {
             materials: upload(device, mats)?,
             triangle_count: tris.len(),
             lights: upload(device, &lights.entries)?,
+            delta_lights: upload(device, &lights.delta)?,
             light_count: lights.count,
             env_light: lights.env_light,
             bvh_build: std::time::Duration::ZERO,

@@ -14,6 +14,7 @@ pub mod multi_device;
 pub mod output;
 pub mod provenance;
 pub mod renderer;
+pub mod roulette;
 pub mod shard;
 
 pub use gpu_scene::GpuScene;
@@ -22,4 +23,5 @@ pub use renderer::{
     Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
     HostTimes, RenderStats, Renderer,
 };
+pub use roulette::Roulette;
 pub use shard::Shard;

@@ -128,7 +128,7 @@ impl Provenance {
             Budget::KernelTime(t) => format!("time={}s", t.as_secs_f64()),
         };
         let options = format!(
-            "algorithm={} in-patch={:?} n={} group-rr={} whole-group-end={} rr-continue={} interleave={} coherent-glossy={} \
+            "algorithm={} in-patch={:?} n={} group-rr={} whole-group-end={} rr-continue={} roulette={} interleave={} coherent-glossy={} \
              compact={} coherent-light={} light-cells={}",
             o.algorithm.name(),
             o.in_patch,
@@ -136,6 +136,7 @@ impl Provenance {
             o.group_rr,
             o.whole_group_end.map(|q| q.to_string()).unwrap_or_else(|| "off".into()),
             o.rr_continue,
+            o.roulette.name(),
             o.interleave,
             o.coherent_glossy,
             o.compact,

@@ -135,6 +135,9 @@ pub struct RenderOptions {
     pub compact: bool,
     /// Russian roulette continuation probability (the paper: 0.8).
     pub rr_continue: f32,
+    /// Which Russian roulette ends paths: the paper's fixed `rr_continue` (the default), or
+    /// Mitsuba's throughput-based one from the scene's `rr_depth`.
+    pub roulette: crate::Roulette,
     /// Whole-group termination (beyond the paper): when a path of a group ends, the
     /// group's other paths play one shared roulette with this continuation probability
     /// (`cohort_kernels::path_end`). `None`: paths end one by one. Needs warp or block groups.
@@ -198,6 +201,7 @@ impl Default for RenderOptions {
             size: None,
             compact: true,
             rr_continue: 0.8,
+            roulette: crate::Roulette::Fixed,
             whole_group_end: None,
             integrator: IntegratorKind::Path,
             coherent_light: false,
@@ -405,6 +409,8 @@ impl<'d> Renderer<'d> {
         }
         validate(&opts, w, h)?;
         let f = camera.frame();
+        let (max_depth, zero_depth) = crate::roulette::depth_fields(scene);
+        let (rr_depth, roulette_throughput) = opts.roulette.frame_fields(scene);
         let mut frame = Frame {
             cam_origin: f.origin,
             width: w,
@@ -414,8 +420,11 @@ impl<'d> Renderer<'d> {
             slots: n as u32,
             cam_up: f.up,
             environment: scene.environment,
-            max_depth: scene.integrator.max_depth.max(0) as u32,
-            rr_depth: 0,
+            max_depth,
+            zero_depth,
+            rr_depth,
+            roulette_throughput,
+            hide_emitters: scene.integrator.hide_emitters as u32,
             has_geometry: (gpu.triangle_count > 0) as u32,
             iteration: 0,
             light_count: gpu.light_count,
@@ -446,8 +455,21 @@ impl<'d> Renderer<'d> {
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
         };
-        let startup = Startup { bvh_build: gpu.bvh_build, upload: gpu.upload + allocated.elapsed(), pipelines: Duration::ZERO };
-        let mut r = Renderer { device, scene: gpu, frame, paths, slot_to_pixel, opts, run: None, startup };
+        let startup = Startup {
+            bvh_build: gpu.bvh_build,
+            upload: gpu.upload + allocated.elapsed(),
+            pipelines: Duration::ZERO,
+        };
+        let mut r = Renderer {
+            device,
+            scene: gpu,
+            frame,
+            paths,
+            slot_to_pixel,
+            opts,
+            run: None,
+            startup,
+        };
         r.with_kernels(Prepare)?;
         Ok(r)
     }
@@ -521,7 +543,10 @@ impl<'d> Renderer<'d> {
         mut progress: impl FnMut(f64, &RenderStats),
     ) -> Result<(Image, RenderStats), RenderError> {
         self.start()?;
-        let stats = self.with_sampler::<S, _>(Advance { until: self.opts.shard_budget(), progress: &mut progress })?;
+        let stats = self.with_sampler::<S, _>(Advance {
+            until: self.opts.shard_budget(),
+            progress: &mut progress,
+        })?;
         Ok((self.image()?, stats))
     }
 
@@ -582,7 +607,10 @@ impl<'d> Renderer<'d> {
         until: Budget,
         mut progress: impl FnMut(f64, &RenderStats),
     ) -> Result<RenderStats, RenderError> {
-        self.with_kernels(Advance { until, progress: &mut progress })
+        self.with_kernels(Advance {
+            until,
+            progress: &mut progress,
+        })
     }
 
     /// Runs `op` with the kernel types of the current options: the diffuse strategy `S`,
@@ -627,15 +655,28 @@ impl<'d> Renderer<'d> {
 
     /// Compiles the pipelines of every kernel the options use (driver compilation, which
     /// the on-disk pipeline cache shortens on later runs), so that no render pays for it.
-    fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(&mut self) -> Result<(), RenderError> {
+    fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+        &mut self,
+    ) -> Result<(), RenderError> {
         let started = Instant::now();
         let d = self.device;
         let specs = self.specs();
-        let mut arts = vec![init_paths::artifact(&init_paths::spec(d, None))?, extend::artifact::<S, E, I>(&specs.extend)?];
+        let mut arts = vec![
+            init_paths::artifact(&init_paths::spec(d, None))?,
+            extend::artifact::<S, E, I>(&specs.extend)?,
+        ];
         let wide = self.scene.nodes8.is_some();
-        arts.push(if wide { traverse8::artifact(&specs.traverse8)? } else { traverse::artifact(&specs.traverse)? });
+        arts.push(if wide {
+            traverse8::artifact(&specs.traverse8)?
+        } else {
+            traverse::artifact(&specs.traverse)?
+        });
         if I::NEE {
-            arts.push(if wide { trace_shadow8::artifact(&specs.shadow8)? } else { trace_shadow::artifact(&specs.shadow)? });
+            arts.push(if wide {
+                trace_shadow8::artifact(&specs.shadow8)?
+            } else {
+                trace_shadow::artifact(&specs.shadow)?
+            });
         }
         if self.opts.compact {
             arts.extend(compact::artifacts(&specs.compact)?);
@@ -912,6 +953,7 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &scene.triangles,
         &scene.materials,
         &scene.lights,
+        &scene.delta_lights,
         &p.state,
         &p.ray_o,
         &p.ray_d,

@@ -42,4 +42,4 @@ pub use mitsuba::{
     load_mitsuba_with_params, LoadOptions, Loaded,
 };
 pub use morton::{morton2d_decode, morton2d_encode, morton_pixel_order};
-pub use scene::{Integrator, Object, Scene, SceneStats, Triangles};
+pub use scene::{Integrator, Light, Object, Scene, SceneStats, Triangles};

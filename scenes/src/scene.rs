@@ -3,7 +3,7 @@
 //! structure-of-arrays triangle soup in world space, because the GPU wants exactly that after the
 //! BVH has reordered it; nothing here knows about files or GPUs.
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use std::ops::Range;
 
 use crate::camera::Camera;
@@ -71,8 +71,9 @@ pub struct Object {
 }
 
 /// Integrator settings read from the scene (Mitsuba `path`, or the `path` nested in `aov` /
-/// `moment`); the renderer decides what to honour (it uses a fixed Russian roulette, see
-/// PAPER.md), but keeps them so a reference run can match.
+/// `moment`). The renderer honours `max_depth` and `hide_emitters` always, and `rr_depth` when
+/// asked for Mitsuba's throughput-based roulette (`cohort_render::Roulette::Mitsuba`); the
+/// paper's configurations keep their fixed continuation probability (PAPER.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Integrator {
     /// Longest path, in vertices after the camera (1: only emitters seen directly; 0: nothing);
@@ -96,6 +97,26 @@ impl Default for Integrator {
     }
 }
 
+/// A light that is not a surface (Mitsuba `point`, `spot`, `directional`), in world space.
+/// None of them can be hit by a ray: next-event estimation is the only way to reach them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// Radiant intensity `intensity` (W/sr) in every direction from `position`.
+    Point { position: Vec3, intensity: Vec3 },
+    /// Mitsuba `spot`: at the origin of `to_world` pointing along its +z, radiant intensity
+    /// `intensity` inside `beam_width`, falling off linearly in angle to 0 at `cutoff_angle`
+    /// (both in radians, half-angles from the axis).
+    Spot {
+        to_world: Mat4,
+        intensity: Vec3,
+        cutoff_angle: f32,
+        beam_width: f32,
+    },
+    /// Parallel light travelling along `direction` (unit) with `irradiance` (W/m^2) on a
+    /// surface facing it.
+    Directional { direction: Vec3, irradiance: Vec3 },
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     pub camera: Camera,
@@ -104,6 +125,8 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Radiance of rays that leave the scene (Mitsuba `constant` emitter); black when absent.
     pub environment: Vec3,
+    /// Point, spot and directional lights (Mitsuba emitters that are not shapes).
+    pub lights: Vec<Light>,
     pub integrator: Integrator,
     /// The sampler's sample count from the file; a placeholder the renderer may override.
     pub sample_count: u32,
@@ -135,6 +158,7 @@ impl Scene {
             materials: Vec::new(),
             objects: Vec::new(),
             environment: Vec3::ZERO,
+            lights: Vec::new(),
             integrator: Integrator::default(),
             sample_count: 1,
         }

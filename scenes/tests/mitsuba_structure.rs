@@ -406,10 +406,15 @@ fn nested_integrators_use_the_inner_one() {
         r#"<integrator type="path"><integer name="max_depth" value="-2"/></integrator>"#,
         r#"<integrator type="path"><float name="max_depth" value="2"/></integrator>"#,
         r#"<integrator type="path"/><integrator type="path"/>"#,
-        r#"<integrator type="direct"/>"#,
     ] {
         assert!(read(body).is_err(), "{body}");
     }
+    // `direct` is the path integrator's image at max_depth 2, said in a warning.
+    let (i, w) =
+        read(r#"<integrator type="direct"><integer name="emitter_samples" value="4"/><boolean name="hide_emitters" value="true"/></integrator>"#)
+            .unwrap();
+    assert_eq!((i.max_depth, i.hide_emitters), (2, true));
+    assert!(w.iter().any(|w| w.message.contains("'direct' rendered by 'path' with max_depth 2")));
     // max_depth 0 is valid (Mitsuba renders black).
     assert_eq!(
         read(r#"<integrator type="path"><integer name="max_depth" value="0"/></integrator>"#)
@@ -599,8 +604,8 @@ fn unsupported_plugins_strict_and_lenient() {
     let dir = tmp_dir("unsupported");
     for (body, plugin, instead) in [
         (
-            r#"<emitter type="point"><point name="position" value="0, 1, 0"/></emitter>"#,
-            "emitter 'point'",
+            r#"<emitter type="projector"><float name="fov" value="30"/></emitter>"#,
+            "emitter 'projector'",
             "skipped",
         ),
         (

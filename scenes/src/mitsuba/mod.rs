@@ -17,6 +17,7 @@
 
 mod bsdf;
 mod diag;
+mod emitter;
 mod plugins;
 mod props;
 mod shape;
@@ -231,7 +232,10 @@ fn build(mut diag: Diag, doc: &xml::Document) -> Result<(Scene, Vec<Warning>), S
 
 fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> {
     let mut camera: Option<(Camera, u32)> = None;
-    let mut environment: Option<Vec3> = None;
+    let mut emitters = emitter::Emitters {
+        environment: None,
+        lights: Vec::new(),
+    };
     let mut integrator: Option<Integrator> = None;
     let mut builder = SceneBuilder::new(default_camera());
 
@@ -242,7 +246,7 @@ fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> 
         match obj.tag.as_str() {
             // Mitsuba adds a shape (or emitter) once per top-level occurrence, references included.
             "shape" => shape::add_shape(ctx, obj, &mut builder)?,
-            "emitter" => emitter(ctx, obj, &mut environment)?,
+            "emitter" => emitter::emitter(ctx, obj, &mut emitters)?,
             "sensor" if camera.is_some() => ctx.diag.warn(
                 &c.loc,
                 "only the first sensor is rendered; this one is ignored",
@@ -290,53 +294,11 @@ fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> 
     });
     let scene = builder.scene_mut();
     scene.camera = camera;
-    scene.environment = environment.unwrap_or(Vec3::ZERO);
+    scene.environment = emitters.environment.unwrap_or(Vec3::ZERO);
+    scene.lights = emitters.lights;
     scene.integrator = integrator;
     scene.sample_count = sample_count;
     Ok(builder.finish())
-}
-
-fn emitter<'a>(
-    ctx: &mut Ctx<'a>,
-    obj: &'a Obj,
-    environment: &mut Option<Vec3>,
-) -> Result<(), SceneError> {
-    match obj.plugin.as_str() {
-        "constant" => {
-            let radiance = ctx.color(obj, "radiance")?.unwrap_or(Vec3::ONE);
-            if !radiance.is_finite() || radiance.min_element() < 0.0 {
-                return Err(syntax(
-                    obj.loc_of("radiance"),
-                    "radiance must be finite and >= 0",
-                ));
-            }
-            obj.finish(&mut ctx.diag)?;
-            match environment {
-                Some(first) => {
-                    ctx.diag.unsupported(
-                        &obj.loc,
-                        "a second environment emitter (Mitsuba allows one per scene)",
-                        "added to the first",
-                    )?;
-                    *first += radiance;
-                }
-                None => *environment = Some(radiance),
-            }
-            Ok(())
-        }
-        // With an id it is attached where a shape refers to it; Mitsuba drops a bare one.
-        "area" if obj.id.is_some() => Ok(()),
-        "area" => {
-            ctx.diag.warn(
-                &obj.loc,
-                "an area emitter must be nested in a <shape>; ignored (as Mitsuba does)",
-            );
-            Ok(())
-        }
-        other => ctx
-            .diag
-            .unsupported(&obj.loc, plugins::describe("emitter", other), "skipped"),
-    }
 }
 
 /// Mitsuba's default sensor: perspective at the origin looking down +z, 50 mm lens, 768 x 576 film.
@@ -649,7 +611,7 @@ fn parse_integrator<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Integrator, S
         "ptracer" => {
             ctx.diag.warn(
                 &obj.loc,
-                "integrator 'ptracer' (light tracing) read as 'path' (the same expected image)",
+                "integrator 'ptracer' (light tracing) rendered by 'path' (the same expected image)",
             );
             obj.ignore("samples_per_pass");
         }
@@ -691,17 +653,23 @@ fn parse_integrator<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Integrator, S
             };
         }
         "direct" | "direct_projective" => {
-            ctx.diag.unsupported(
+            // Direct illumination is the path integrator's image at max_depth 2; the sample
+            // counts only change how the same expectation is estimated.
+            ctx.diag.warn(
                 &obj.loc,
-                plugins::describe("integrator", &obj.plugin),
-                "'path' with max_depth 2 (direct illumination) used",
-            )?;
+                format!(
+                    "integrator '{}' rendered by 'path' with max_depth 2 (the same expected image)",
+                    obj.plugin
+                ),
+            );
             for name in ["emitter_samples", "bsdf_samples", "shading_samples"] {
                 obj.ignore(name);
             }
+            let hide_emitters = obj.boolean("hide_emitters")?.unwrap_or(false);
+            obj.finish(&mut ctx.diag)?;
             return Ok(Integrator {
                 max_depth: 2,
-                hide_emitters: obj.boolean("hide_emitters")?.unwrap_or(false),
+                hide_emitters,
                 ..Integrator::default()
             });
         }
@@ -732,12 +700,6 @@ fn parse_integrator<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Integrator, S
             .ok_or_else(|| syntax(obj.loc_of("rr_depth"), "rr_depth must be > 0"))?,
     };
     let hide_emitters = obj.boolean("hide_emitters")?.unwrap_or(false);
-    if hide_emitters {
-        ctx.diag.warn(
-            obj.loc_of("hide_emitters"),
-            "hide_emitters is not supported by the renderer yet: emitters stay visible",
-        );
-    }
     obj.finish(&mut ctx.diag)?;
     Ok(Integrator {
         max_depth,

@@ -1,0 +1,153 @@
+//! Mitsuba emitters that are not attached to a shape: `constant` (the environment), `point`,
+//! `spot` and `directional`, read with Mitsuba 3.9's parameters and defaults. (`area` emitters
+//! are read where their shape is, in `shape.rs`.)
+
+use glam::{Mat4, Vec3};
+
+use super::diag::syntax;
+use super::props::Obj;
+use super::{plugins, Ctx};
+use crate::error::SceneError;
+use crate::scene::Light;
+
+/// What a top-level `<emitter>` adds to the scene.
+pub(crate) struct Emitters {
+    /// Constant environment radiance (Mitsuba `constant`).
+    pub environment: Option<Vec3>,
+    pub lights: Vec<Light>,
+}
+
+/// Reads one top-level `<emitter>` into `out`.
+pub(crate) fn emitter<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
+    out: &mut Emitters,
+) -> Result<(), SceneError> {
+    match obj.plugin.as_str() {
+        "constant" => {
+            let radiance = spectrum(ctx, obj, "radiance")?;
+            obj.finish(&mut ctx.diag)?;
+            match &mut out.environment {
+                Some(first) => {
+                    ctx.diag.unsupported(
+                        &obj.loc,
+                        "a second environment emitter (Mitsuba allows one per scene)",
+                        "added to the first",
+                    )?;
+                    *first += radiance;
+                }
+                None => out.environment = Some(radiance),
+            }
+        }
+        "point" => {
+            let intensity = spectrum(ctx, obj, "intensity")?;
+            let position = match vector_or_to_world(obj, "position")? {
+                Ok(p) => p,
+                Err(to_world) => to_world.transform_point3(Vec3::ZERO),
+            };
+            obj.finish(&mut ctx.diag)?;
+            out.lights.push(Light::Point {
+                position,
+                intensity,
+            });
+        }
+        "spot" => {
+            let intensity = spectrum(ctx, obj, "intensity")?;
+            let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+            let cutoff = obj.float("cutoff_angle")?.unwrap_or(20.0);
+            let beam = obj.float("beam_width")?.unwrap_or(cutoff * 0.75);
+            if !(cutoff > 0.0 && cutoff <= 180.0) {
+                return Err(syntax(
+                    obj.loc_of("cutoff_angle"),
+                    format!("emitter 'spot': cutoff_angle {cutoff} must be in (0, 180] degrees"),
+                ));
+            }
+            // Mitsuba asserts cutoff_angle >= beam_width; equal angles make a hard-edged cone.
+            if !(beam >= 0.0 && beam <= cutoff) {
+                return Err(syntax(
+                    obj.loc_of("beam_width"),
+                    format!(
+                        "emitter 'spot': beam_width {beam} must be in [0, cutoff_angle = {cutoff}] degrees"
+                    ),
+                ));
+            }
+            if glam::Mat3::from_mat4(to_world).determinant() == 0.0 {
+                return Err(syntax(
+                    obj.loc_of("to_world"),
+                    "emitter 'spot': to_world is singular",
+                ));
+            }
+            if obj.has("texture") {
+                ctx.diag.unsupported(
+                    obj.loc_of("texture"),
+                    "emitter 'spot': a projected 'texture' is not supported",
+                    "rendered without it",
+                )?;
+                obj.ignore("texture");
+            }
+            obj.finish(&mut ctx.diag)?;
+            out.lights.push(Light::Spot {
+                to_world,
+                intensity,
+                cutoff_angle: cutoff.to_radians(),
+                beam_width: beam.to_radians(),
+            });
+        }
+        "directional" => {
+            let irradiance = spectrum(ctx, obj, "irradiance")?;
+            let direction = match vector_or_to_world(obj, "direction")? {
+                Ok(d) => d,
+                Err(to_world) => to_world.transform_vector3(Vec3::Z),
+            };
+            if !(direction.length() > 0.0 && direction.is_finite()) {
+                return Err(syntax(
+                    obj.loc_of("direction"),
+                    "emitter 'directional': the direction is zero",
+                ));
+            }
+            obj.finish(&mut ctx.diag)?;
+            out.lights.push(Light::Directional {
+                direction: direction.normalize(),
+                irradiance,
+            });
+        }
+        // With an id it is attached where a shape refers to it; Mitsuba drops a bare one.
+        "area" if obj.id.is_some() => {}
+        "area" => ctx.diag.warn(
+            &obj.loc,
+            "an area emitter must be nested in a <shape>; ignored (as Mitsuba does)",
+        ),
+        other => ctx
+            .diag
+            .unsupported(&obj.loc, plugins::describe("emitter", other), "skipped")?,
+    }
+    Ok(())
+}
+
+/// Mitsuba's rule for `point` (`position`) and `directional` (`direction`): the vector
+/// parameter `name` (Ok), or else `to_world` (Err, identity when absent), never both.
+fn vector_or_to_world(obj: &Obj, name: &str) -> Result<Result<Vec3, Mat4>, SceneError> {
+    match (obj.vector(name)?, obj.transform("to_world")?) {
+        (Some(_), Some(_)) => Err(syntax(
+            obj.loc_of(name),
+            format!(
+                "emitter '{}': give either '{name}' or 'to_world', not both",
+                obj.plugin
+            ),
+        )),
+        (Some(v), None) => Ok(Ok(v)),
+        (None, m) => Ok(Err(m.unwrap_or(Mat4::IDENTITY))),
+    }
+}
+
+/// A non-negative colour parameter, 1 when absent (Mitsuba's default for every emitter).
+fn spectrum<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj, name: &str) -> Result<Vec3, SceneError> {
+    let v = ctx.color(obj, name)?.unwrap_or(Vec3::ONE);
+    if !v.is_finite() || v.min_element() < 0.0 {
+        return Err(syntax(
+            obj.loc_of(name),
+            format!("emitter '{}': {name} must be finite and >= 0", obj.plugin),
+        ));
+    }
+    Ok(v)
+}

@@ -1,0 +1,80 @@
+//! Point, spot and directional emitters read with Mitsuba 3.9's parameters and defaults.
+
+use cohort_scenes::{load_mitsuba_str, Light};
+use glam::{Mat4, Vec3};
+
+fn lights(body: &str) -> Result<Vec<Light>, String> {
+    let xml = format!(r#"<scene version="3.0.0">{body}</scene>"#);
+    load_mitsuba_str(&xml, ".")
+        .map(|l| l.scene.lights)
+        .map_err(|e| e.to_string())
+}
+
+#[test]
+fn point_light_position_from_either_parameter() {
+    let l = lights(r#"<emitter type="point"><point name="position" value="1, 2, 3"/><rgb name="intensity" value="4, 5, 6"/></emitter>"#).unwrap();
+    assert_eq!(
+        l,
+        vec![Light::Point {
+            position: Vec3::new(1.0, 2.0, 3.0),
+            intensity: Vec3::new(4.0, 5.0, 6.0)
+        }]
+    );
+    let l = lights(r#"<emitter type="point"><transform name="to_world"><translate x="-1" y="0.5"/></transform></emitter>"#).unwrap();
+    assert_eq!(
+        l,
+        vec![Light::Point {
+            position: Vec3::new(-1.0, 0.5, 0.0),
+            intensity: Vec3::ONE
+        }]
+    );
+    let e = lights(r#"<emitter type="point"><point name="position" value="1, 2, 3"/><transform name="to_world"><translate x="1"/></transform></emitter>"#).unwrap_err();
+    assert!(e.contains("not both") && e.contains(":1:"), "{e}");
+    let e = lights(r#"<emitter type="point"><float name="intensity" value="-1"/></emitter>"#)
+        .unwrap_err();
+    assert!(e.contains("intensity must be finite and >= 0"), "{e}");
+}
+
+#[test]
+fn spot_defaults_are_mitsubas() {
+    let l = lights(r#"<emitter type="spot"><transform name="to_world"><lookat origin="0, 1, 0" target="0, 0, 0" up="0, 0, 1"/></transform></emitter>"#).unwrap();
+    let [Light::Spot {
+        to_world,
+        intensity,
+        cutoff_angle,
+        beam_width,
+    }] = l.as_slice()
+    else {
+        panic!("{l:?}")
+    };
+    assert_eq!(*intensity, Vec3::ONE);
+    assert!((cutoff_angle - 20f32.to_radians()).abs() < 1e-6);
+    assert!((beam_width - 15f32.to_radians()).abs() < 1e-6);
+    // The spot looks along its +z: here, down.
+    let axis = to_world.transform_vector3(Vec3::Z);
+    assert!((axis - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-5, "{axis}");
+    assert_eq!(to_world.transform_point3(Vec3::ZERO), Vec3::new(0.0, 1.0, 0.0));
+    let e = lights(r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="12"/></emitter>"#).unwrap_err();
+    assert!(e.contains("beam_width 12"), "{e}");
+    let e = lights(r#"<emitter type="spot"><texture type="bitmap" name="texture"><string name="filename" value="x.png"/></texture></emitter>"#).unwrap_err();
+    assert!(e.contains("'texture' is not supported"), "{e}");
+}
+
+#[test]
+fn directional_light_direction() {
+    let l = lights(r#"<emitter type="directional"><vector name="direction" value="0, -2, 0"/><rgb name="irradiance" value="3, 3, 3"/></emitter>"#).unwrap();
+    assert_eq!(
+        l,
+        vec![Light::Directional {
+            direction: Vec3::new(0.0, -1.0, 0.0),
+            irradiance: Vec3::splat(3.0)
+        }]
+    );
+    let l = lights(r#"<emitter type="directional"><transform name="to_world"><rotate x="1" angle="90"/></transform></emitter>"#).unwrap();
+    let Light::Directional { direction, .. } = l[0] else {
+        panic!()
+    };
+    let want = Mat4::from_rotation_x(90f32.to_radians()).transform_vector3(Vec3::Z);
+    assert!((direction - want).length() < 1e-5, "{direction} vs {want}");
+    assert!(lights(r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#).is_err());
+}

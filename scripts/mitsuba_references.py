@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""Writes the small test scenes of render/tests/mitsuba_reference.rs and their references.
+
+For each scene, writes `render/tests/scenes/mitsuba/<name>.xml` and renders it with the
+`mitsuba` Python package (3.9.1, variant scalar_rgb), the scene's integrator wrapped in
+Mitsuba's `moment` integrator, which records per pixel the mean of the samples and of
+their squares. Writes `<name>.mean.exr` (R, G, B: the reference image) and
+`<name>.var.exr` (the variance of one sample, E[x^2] - E[x]^2, per CIE XYZ channel, which
+is what Mitsuba's own render test divides by), both in Mitsuba's format for its render
+tests: converted from XYZ to linear sRGB with the matrix below (the variance file is thus
+XYZ variance stored through that linear map; the test maps it back).
+
+Usage: scripts/mitsuba_references.py [--spp N] [names...]   (default: every scene, 32768 spp)
+"""
+
+import argparse
+import os
+import re
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "..", "render", "tests", "scenes", "mitsuba")
+
+SIZE = 32
+
+# Linear sRGB (Rec. 709 primaries, D65) to CIE XYZ, as Mitsuba's Bitmap converts; the Rust
+# test uses the same matrix to bring both files back to XYZ, where the test is done.
+SRGB_TO_XYZ = np.array(
+    [
+        [0.412453, 0.357580, 0.180423],
+        [0.212671, 0.715160, 0.072169],
+        [0.019334, 0.119193, 0.950227],
+    ]
+)
+XYZ_TO_SRGB = np.linalg.inv(SRGB_TO_XYZ)
+
+# An open-fronted box 2 x 2 x 2 (floor y=0, ceiling y=2, back wall z=-1, red left and green
+# right walls) with a white cube, seen from the front. Rectangles face the inside.
+BOX = """
+    <bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.7, 0.7, 0.7"/></bsdf>
+    <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.6, 0.1, 0.1"/></bsdf>
+    <bsdf type="diffuse" id="green"><rgb name="reflectance" value="0.1, 0.6, 0.15"/></bsdf>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><translate y="1" z="-1"/></transform><ref id="white"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="90"/><translate x="-1" y="1"/></transform><ref id="red"/></shape>
+    <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="-90"/><translate x="1" y="1"/></transform><ref id="green"/></shape>
+    <shape type="cube"><transform name="to_world"><scale value="0.3"/><rotate y="1" angle="25"/><translate x="0.35" y="0.3" z="-0.3"/></transform><ref id="white"/></shape>
+"""
+CEILING = """
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="90"/><translate y="2"/></transform><ref id="white"/></shape>
+"""
+AREA_LIGHT = """
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate y="1.98"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="12, 11, 9"/></emitter>
+    </shape>
+"""
+
+
+def scene(integrator, body):
+    return f"""<scene version="3.0.0">
+    <integrator type="path">{integrator}</integrator>
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>
+{BOX}{body}
+</scene>
+"""
+
+
+SCENES = {
+    # The area light and diffuse surfaces every other test builds on.
+    "area": scene("", CEILING + AREA_LIGHT),
+    # Only what the camera sees directly: the light.
+    "max_depth_1": scene('<integer name="max_depth" value="1"/>', CEILING + AREA_LIGHT),
+    # Direct illumination only.
+    "max_depth_2": scene('<integer name="max_depth" value="2"/>', CEILING + AREA_LIGHT),
+    # Camera rays pass through the light and do not see the sky behind the open front.
+    "hide_emitters": scene(
+        '<boolean name="hide_emitters" value="true"/>',
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.4, 0.5, 0.6"/></emitter>',
+    ),
+    "point": scene(
+        "",
+        CEILING
+        + '<emitter type="point"><point name="position" value="-0.2, 1.5, 0.1"/>'
+        + '<rgb name="intensity" value="3, 2.5, 2"/></emitter>',
+    ),
+    "spot": scene(
+        "",
+        CEILING
+        + """<emitter type="spot">
+        <transform name="to_world"><lookat origin="-0.3, 1.9, 0.4" target="0.2, 0, -0.3" up="0, 0, 1"/></transform>
+        <rgb name="intensity" value="8, 7, 6"/>
+        <float name="cutoff_angle" value="35"/><float name="beam_width" value="20"/>
+    </emitter>""",
+    ),
+    # No ceiling: sunlight falls into the box from above.
+    "directional": scene(
+        "",
+        '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'
+        + '<rgb name="irradiance" value="2, 1.8, 1.5"/></emitter>',
+    ),
+}
+
+
+def render(xml, spp):
+    """The image and the per-sample variance of `xml` at `spp` samples per pixel."""
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    # The scene's own integrator, wrapped in `moment`; its sampler's count set to `spp`.
+    wrapped = xml.replace('<integrator type="path">', '<integrator type="moment"><integrator type="path">', 1)
+    wrapped = wrapped.replace("</integrator>", "</integrator></integrator>", 1)
+    wrapped = re.sub(r'name="sample_count" value="\d+"', f'name="sample_count" value="{spp}"', wrapped)
+    scene = mi.load_string(wrapped)
+    img = np.array(mi.render(scene, seed=0), dtype=np.float64)
+    # Channels: R, G, B, then the first and second moments of the wrapped integrator's
+    # samples, which Mitsuba's `moment` integrator records in CIE XYZ.
+    if img.shape[2] != 9:
+        sys.exit(f"expected 9 film channels (RGB and two moments of XYZ), found {img.shape[2]}")
+    rgb, m1, m2 = img[:, :, 0:3], img[:, :, 3:6], img[:, :, 6:9]
+    if not np.allclose(rgb @ SRGB_TO_XYZ.T, m1, rtol=1e-3, atol=1e-5):
+        sys.exit("the first moment is not the image in XYZ: channels are not in the expected order")
+    var_xyz = np.maximum(m2 - m1 * m1, 0.0)
+    # Stored as Mitsuba's render tests store them: both images converted from XYZ to RGB.
+    return m1 @ XYZ_TO_SRGB.T, var_xyz @ XYZ_TO_SRGB.T
+
+
+def write_exr(path, rgb):
+    import mitsuba as mi
+
+    bmp = mi.Bitmap(np.ascontiguousarray(rgb.astype(np.float32)), mi.Bitmap.PixelFormat.RGB)
+    bmp.write(path)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--spp", type=int, default=32768)
+    ap.add_argument("names", nargs="*")
+    a = ap.parse_args()
+    names = a.names or list(SCENES)
+    os.makedirs(OUT, exist_ok=True)
+    for name in names:
+        xml = SCENES[name]
+        with open(os.path.join(OUT, f"{name}.xml"), "w") as f:
+            f.write(xml)
+        mean, var = render(xml, a.spp)
+        write_exr(os.path.join(OUT, f"{name}.mean.exr"), mean)
+        write_exr(os.path.join(OUT, f"{name}.var.exr"), var)
+        print(f"{name}: mean {mean.mean(axis=(0, 1))}, per-sample variance {var.mean(axis=(0, 1))}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
