@@ -39,7 +39,12 @@ fn main() {
     for k in 0..n {
         let group = SharedAzimuth::group_value(stream(1, k / 32, 0, 0), 16);
         let key = stream(2, k, 0, 0);
-        let d = SharedAzimuth::sample(Vec3::Z, Vec2::new(uniform(key, 0), uniform(key, 1)), group, 16);
+        let d = SharedAzimuth::sample(
+            Vec3::Z,
+            Vec2::new(uniform(key, 0), uniform(key, 1)),
+            group,
+            16,
+        );
         sum += d.z as f64 * d.w as f64;
     }
     let mean = sum / n as f64;
@@ -47,10 +52,14 @@ fn main() {
     assert!((mean - 2.0 / 3.0).abs() < 0.01);
 
     // 2. On the GPU: render the default scene with it, groups of one warp.
-    let device = Device::best().expect("a Vulkan device (scripts/install-deps.sh installs lavapipe)");
+    let device =
+        Device::best().expect("a Vulkan device (scripts/install-deps.sh installs lavapipe)");
     let scene = cohort_scenes::embedded::load("cornell").unwrap();
     let opts = RenderOptions {
-        algorithm: Algorithm { group: Group::Warp, coherent: true },
+        algorithm: Algorithm {
+            group: Group::Warp,
+            coherent: true,
+        },
         patches_n: 16,
         budget: Budget::PathsPerPixel(32),
         size: Some((128, 128)),
@@ -59,5 +68,9 @@ fn main() {
     let mut renderer = Renderer::new(&device, &scene, opts).unwrap();
     let (image, stats) = renderer.render_custom::<SharedAzimuth>(|_, _| {}).unwrap();
     output::write_png(std::path::Path::new("custom_sampler.png"), &image, 0.0).unwrap();
-    println!("rendered {} paths/pixel, mean radiance {}; wrote custom_sampler.png", stats.paths_per_pixel(), image.mean());
+    println!(
+        "rendered {} paths/pixel, mean radiance {}; wrote custom_sampler.png",
+        stats.paths_per_pixel(),
+        image.mean()
+    );
 }

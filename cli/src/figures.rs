@@ -14,14 +14,18 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use cohort::runtime::{BackendKind, Device};
-use cohort_render::{output, Algorithm, Budget, Image, InPatch, IntegratorKind, RenderOptions, RenderStats, Renderer};
+use cohort_render::{
+    output, Algorithm, Budget, Image, InPatch, IntegratorKind, RenderOptions, RenderStats, Renderer,
+};
 use cohort_scenes::embedded;
 use glam::Vec3;
 use plotters::backend::BitMapBackend;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters_backend::text_anchor::{HPos, VPos};
-use plotters_backend::{BackendColor, BackendCoord, BackendStyle as Style, BackendTextStyle, DrawingErrorKind};
+use plotters_backend::{
+    BackendColor, BackendCoord, BackendStyle as Style, BackendTextStyle, DrawingErrorKind,
+};
 
 const DEFAULT_SCENES: &str = "confroom,fairyforest,sponza,stanford";
 const DEFAULT_CONFIGS: &str = "normal,warp,block_256,block_512,block_1024,grid";
@@ -86,11 +90,46 @@ pub struct FiguresArgs {
 /// The columns of the figures: the paper's three (Russian roulette per path or per
 /// group, compaction or not) and whole-group termination with and without compaction.
 const COLUMNS: [Column; 5] = [
-    Column { key: "path", group_rr: false, whole: false, compact: true, suffix: "", title: "per-path RR, compaction" },
-    Column { key: "rr", group_rr: true, whole: false, compact: true, suffix: "_rr", title: "_rr: group RR, compaction" },
-    Column { key: "rr-no", group_rr: true, whole: false, compact: false, suffix: "_rr (NO)", title: "_rr (NO): group RR, no compaction" },
-    Column { key: "whole", group_rr: true, whole: true, compact: true, suffix: "_whole", title: "_whole: whole-group end, compaction" },
-    Column { key: "whole-no", group_rr: true, whole: true, compact: false, suffix: "_whole (NO)", title: "_whole (NO): whole-group end, no compaction" },
+    Column {
+        key: "path",
+        group_rr: false,
+        whole: false,
+        compact: true,
+        suffix: "",
+        title: "per-path RR, compaction",
+    },
+    Column {
+        key: "rr",
+        group_rr: true,
+        whole: false,
+        compact: true,
+        suffix: "_rr",
+        title: "_rr: group RR, compaction",
+    },
+    Column {
+        key: "rr-no",
+        group_rr: true,
+        whole: false,
+        compact: false,
+        suffix: "_rr (NO)",
+        title: "_rr (NO): group RR, no compaction",
+    },
+    Column {
+        key: "whole",
+        group_rr: true,
+        whole: true,
+        compact: true,
+        suffix: "_whole",
+        title: "_whole: whole-group end, compaction",
+    },
+    Column {
+        key: "whole-no",
+        group_rr: true,
+        whole: true,
+        compact: false,
+        suffix: "_whole (NO)",
+        title: "_whole (NO): whole-group end, no compaction",
+    },
 ];
 
 #[derive(Clone, Copy, PartialEq)]
@@ -145,14 +184,22 @@ struct Plan {
 impl Plan {
     /// Measured points and the reference: `normal` is measured again in every group.
     fn points_per_scene(&self) -> u64 {
-        let per_group: u64 = self.columns.iter().map(|c| 1 + self.configs_of(c).len() as u64).sum();
+        let per_group: u64 = self
+            .columns
+            .iter()
+            .map(|c| 1 + self.configs_of(c).len() as u64)
+            .sum();
         (self.interleaves.len() * self.ns.len()) as u64 * per_group + 1
     }
 
     /// The coherent configurations measured in `column` (the grid cannot vote, so it has
     /// no whole-group termination).
     fn configs_of(&self, column: &Column) -> Vec<Algorithm> {
-        self.configs.iter().copied().filter(|a| !(column.whole && a.group == cohort::Group::Grid)).collect()
+        self.configs
+            .iter()
+            .copied()
+            .filter(|a| !(column.whole && a.group == cohort::Group::Grid))
+            .collect()
     }
 }
 
@@ -188,19 +235,25 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
     let plan = parse_plan(&a)?;
     let device = match a.backend.as_deref() {
         None => Device::best(),
-        Some(b) => Device::new(BackendKind::parse(b).ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?),
+        Some(b) => Device::new(
+            BackendKind::parse(b)
+                .ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?,
+        ),
     }
     .map_err(|e| e.to_string())?;
     let info = device.info().clone();
     let device_name = format!("{} [{}]", info.adapter_name, info.backend.name());
-    std::fs::create_dir_all(&plan.out_dir).map_err(|e| format!("cannot create --out-dir {}: {e}", plan.out_dir.display()))?;
+    std::fs::create_dir_all(&plan.out_dir)
+        .map_err(|e| format!("cannot create --out-dir {}: {e}", plan.out_dir.display()))?;
     let csv_path = plan.out_dir.join("figures.csv");
 
     let total = plan.points_per_scene() * plan.scenes.len() as u64;
     let bar = indicatif::ProgressBar::new(total * 1000);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("[{elapsed_precise}] {bar:40} {percent:>3}% eta {eta} {msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(
+            "[{elapsed_precise}] {bar:40} {percent:>3}% eta {eta} {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let log = |line: String| bar.suspend(|| eprintln!("{line}"));
     log(format!(
@@ -220,9 +273,13 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
     for spec in &plan.scenes {
         let scene = crate::load_scene(&spec.arg, &Default::default())?;
         // The BVH is built and uploaded once per scene, not once per point.
-        let gpu = cohort_render::GpuScene::prepare(&device, &scene).map_err(|e| format!("{}: {e}", spec.label))?;
+        let gpu = cohort_render::GpuScene::prepare(&device, &scene)
+            .map_err(|e| format!("{}: {e}", spec.label))?;
         let scene: Prepared = (scene, gpu);
-        let (w, h) = (plan.width.unwrap_or(scene.0.camera.width), plan.height.unwrap_or(scene.0.camera.height));
+        let (w, h) = (
+            plan.width.unwrap_or(scene.0.camera.width),
+            plan.height.unwrap_or(scene.0.camera.height),
+        );
         for &d in &plan.interleaves {
             if gcd(d, w) != 1 || gcd(d, h) != 1 {
                 return Err(format!("bad --interleave value `{d}`: it must be coprime with the image size {w}x{h} of scene `{}`", spec.arg));
@@ -237,7 +294,12 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
         // pipelines (some drivers compile lazily, inside the timed dispatch) is paid here
         // and not inside a measured point.
         for alg in std::iter::once(Algorithm::NORMAL).chain(plan.configs.iter().copied()) {
-            bar.set_message(format!("[{}/{total}] {} warm-up {}", done + 1, spec.label, alg.name()));
+            bar.set_message(format!(
+                "[{}/{total}] {} warm-up {}",
+                done + 1,
+                spec.label,
+                alg.name()
+            ));
             let opts = RenderOptions {
                 algorithm: alg,
                 budget: Budget::KernelTime(Duration::from_nanos(1)),
@@ -245,11 +307,19 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
                 integrator: plan.integrator,
                 ..Default::default()
             };
-            render(&device, &scene, opts, &bar, done).map_err(|e| format!("{} warm-up {}: {e}", spec.label, alg.name()))?;
+            render(&device, &scene, opts, &bar, done)
+                .map_err(|e| format!("{} warm-up {}: {e}", spec.label, alg.name()))?;
         }
 
         // The reference: a long `normal` render, cached in out-dir.
-        point(done, format!("{} reference ({:.1} s)", spec.label, plan.reference_time.as_secs_f64()));
+        point(
+            done,
+            format!(
+                "{} reference ({:.1} s)",
+                spec.label,
+                plan.reference_time.as_secs_f64()
+            ),
+        );
         let reference = reference_image(&device, &scene, spec, (w, h), &plan, &bar, done, &log)?;
         done += 1;
 
@@ -260,7 +330,20 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
         for &d in &plan.interleaves {
             for &column in &plan.columns {
                 for &group_n in &plan.ns {
-                    let group = measure_group(&device, &scene, &plan, spec, (w, h), d, column, group_n, &bar, done, total, &mut pool)?;
+                    let group = measure_group(
+                        &device,
+                        &scene,
+                        &plan,
+                        spec,
+                        (w, h),
+                        d,
+                        column,
+                        group_n,
+                        &bar,
+                        done,
+                        total,
+                        &mut pool,
+                    )?;
                     done += group.len() as u64;
                     let normal_pps = group[0].1.paths_per_second();
                     for (point, stats, image) in group {
@@ -292,7 +375,8 @@ pub fn run(a: FiguresArgs) -> Result<(), String> {
                         rows.push(row);
                     }
                     // Rewritten after every group, so a long sweep that stops keeps what it measured.
-                    output::write_text(&csv_path, &csv(&rows, &device_name, &plan)).map_err(|e| e.to_string())?;
+                    output::write_text(&csv_path, &csv(&rows, &device_name, &plan))
+                        .map_err(|e| e.to_string())?;
                 }
             }
         }
@@ -310,17 +394,29 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     let mut scenes: Vec<SceneSpec> = Vec::new();
     for s in list("--scenes", &a.scenes)? {
         if !(embedded::names().contains(&s) || Path::new(s).is_file()) {
-            return Err(format!("unknown scene `{s}` in --scenes: not an embedded scene ({}) nor an XML file", embedded::names().join(", ")));
+            return Err(format!(
+                "unknown scene `{s}` in --scenes: not an embedded scene ({}) nor an XML file",
+                embedded::names().join(", ")
+            ));
         }
-        let label = if embedded::names().contains(&s) { s.to_string() } else { file_label(s) };
+        let label = if embedded::names().contains(&s) {
+            s.to_string()
+        } else {
+            file_label(s)
+        };
         if scenes.iter().any(|o| o.label == label) {
             return Err(format!("scene `{s}` is listed twice in --scenes (or shares the name `{label}` with another)"));
         }
-        scenes.push(SceneSpec { arg: s.to_string(), label });
+        scenes.push(SceneSpec {
+            arg: s.to_string(),
+            label,
+        });
     }
     let mut configs: Vec<Algorithm> = Vec::new();
     for c in list("--configs", &a.configs)? {
-        let alg = Algorithm::parse(c).ok_or_else(|| format!("unknown config `{c}` in --configs (available: {CONFIG_NAMES})"))?;
+        let alg = Algorithm::parse(c).ok_or_else(|| {
+            format!("unknown config `{c}` in --configs (available: {CONFIG_NAMES})")
+        })?;
         if alg == Algorithm::NORMAL {
             continue;
         }
@@ -331,7 +427,9 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     }
     let mut ns: Vec<u32> = Vec::new();
     for v in list("--n", &a.n)? {
-        let n: u32 = v.parse().map_err(|_| format!("bad N `{v}` in --n: not a whole number"))?;
+        let n: u32 = v
+            .parse()
+            .map_err(|_| format!("bad N `{v}` in --n: not a whole number"))?;
         if !(1..=1000).contains(&n) {
             return Err(format!("bad N `{v}` in --n: N must be in 1..=1000"));
         }
@@ -343,7 +441,9 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     let mut interleaves = vec![1];
     if a.interleave.trim() != "none" {
         for v in list("--interleave", &a.interleave)? {
-            let d: u32 = v.parse().map_err(|_| format!("bad --interleave value `{v}`: not a whole number"))?;
+            let d: u32 = v
+                .parse()
+                .map_err(|_| format!("bad --interleave value `{v}`: not a whole number"))?;
             if d < 3 || d & 1 == 0 {
                 return Err(format!("bad --interleave value `{v}`: D must be odd and at least 3 (use `none` for no Fig. 7)"));
             }
@@ -361,7 +461,10 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
         }
     };
     let time = seconds("--time", a.time)?;
-    let reference_time = seconds("--reference-time", a.reference_time.unwrap_or(20.0 * a.time))?;
+    let reference_time = seconds(
+        "--reference-time",
+        a.reference_time.unwrap_or(20.0 * a.time),
+    )?;
     for (name, v) in [("--width", a.width), ("--height", a.height)] {
         if v == Some(0) {
             return Err(format!("{name} must be at least 1"));
@@ -372,19 +475,25 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
     }
     let mut columns: Vec<Column> = Vec::new();
     for c in list("--columns", &a.columns)? {
-        let col = COLUMNS
-            .iter()
-            .find(|k| k.key == c)
-            .ok_or_else(|| format!("unknown column `{c}` in --columns (available: {})", COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", ")))?;
+        let col = COLUMNS.iter().find(|k| k.key == c).ok_or_else(|| {
+            format!(
+                "unknown column `{c}` in --columns (available: {})",
+                COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", ")
+            )
+        })?;
         if columns.contains(col) {
             return Err(format!("column `{c}` is listed twice in --columns"));
         }
         columns.push(*col);
     }
     if !(a.end_continue > 0.0 && a.end_continue <= 1.0) {
-        return Err(format!("--end-continue {} is not in (0, 1]", a.end_continue));
+        return Err(format!(
+            "--end-continue {} is not in (0, 1]",
+            a.end_continue
+        ));
     }
-    let integrator = IntegratorKind::parse(&a.integrator).ok_or_else(|| format!("unknown --integrator `{}` (path or nee)", a.integrator))?;
+    let integrator = IntegratorKind::parse(&a.integrator)
+        .ok_or_else(|| format!("unknown --integrator `{}` (path or nee)", a.integrator))?;
     Ok(Plan {
         columns,
         end_continue: a.end_continue,
@@ -407,7 +516,9 @@ fn parse_plan(a: &FiguresArgs) -> Result<Plan, String> {
 fn list<'s>(option: &str, s: &'s str) -> Result<Vec<&'s str>, String> {
     let items: Vec<&str> = s.split(',').map(str::trim).collect();
     if items.iter().any(|i| i.is_empty()) {
-        return Err(format!("{option} `{s}` has an empty item (expected a comma-separated list)"));
+        return Err(format!(
+            "{option} `{s}` has an empty item (expected a comma-separated list)"
+        ));
     }
     Ok(items)
 }
@@ -416,19 +527,49 @@ fn list<'s>(option: &str, s: &'s str) -> Result<Vec<&'s str>, String> {
 /// is the generic `scene` (`cornell-box/scene.xml` → `cornell-box`).
 fn file_label(path: &str) -> String {
     let p = Path::new(path);
-    let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let raw = if stem == "scene" { p.parent().and_then(|d| d.file_name()).map(|s| s.to_string_lossy().into_owned()).unwrap_or(stem) } else { stem };
-    raw.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+    let stem = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let raw = if stem == "scene" {
+        p.parent()
+            .and_then(|d| d.file_name())
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or(stem)
+    } else {
+        stem
+    };
+    raw.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// A scene with its BVH already on the device.
-type Prepared = (cohort_scenes::Scene, std::sync::Arc<cohort_render::GpuScene>);
+type Prepared = (
+    cohort_scenes::Scene,
+    std::sync::Arc<cohort_render::GpuScene>,
+);
 
 /// One render on its own: the warm-ups and the reference, which nothing is compared with
 /// for speed.
-fn render(device: &Device, scene: &Prepared, opts: RenderOptions, bar: &indicatif::ProgressBar, index: u64) -> Result<(Image, RenderStats), String> {
-    let mut renderer = Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| e.to_string())?;
-    renderer.render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64)).map_err(|e| e.to_string())
+fn render(
+    device: &Device,
+    scene: &Prepared,
+    opts: RenderOptions,
+    bar: &indicatif::ProgressBar,
+    index: u64,
+) -> Result<(Image, RenderStats), String> {
+    let mut renderer =
+        Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| e.to_string())?;
+    renderer
+        .render(|frac, _| bar.set_position(index * 1000 + (frac * 999.0) as u64))
+        .map_err(|e| e.to_string())
 }
 
 /// A point of a group, before it is measured.
@@ -463,11 +604,34 @@ fn measure_group<'d>(
     pool: &mut Vec<Renderer<'d>>,
 ) -> Result<Vec<(Point, RenderStats, Image)>, String> {
     let points: Vec<Point> = std::iter::once((Algorithm::NORMAL, None))
-        .chain(plan.configs_of(&column).into_iter().map(|alg| (alg, Some(group_n))))
+        .chain(
+            plan.configs_of(&column)
+                .into_iter()
+                .map(|alg| (alg, Some(group_n))),
+        )
         .map(|(algorithm, n)| {
-            let label = format!("{}{}{}", algorithm.name(), column.suffix, if d > 1 { format!(" D{d}") } else { String::new() });
-            let what = format!("{} {label}{}", spec.label, n.map(|n| format!(" N={n}")).unwrap_or_else(|| format!(" (group N={group_n})")));
-            Point { algorithm, n, label, what }
+            let label = format!(
+                "{}{}{}",
+                algorithm.name(),
+                column.suffix,
+                if d > 1 {
+                    format!(" D{d}")
+                } else {
+                    String::new()
+                }
+            );
+            let what = format!(
+                "{} {label}{}",
+                spec.label,
+                n.map(|n| format!(" N={n}"))
+                    .unwrap_or_else(|| format!(" (group N={group_n})"))
+            );
+            Point {
+                algorithm,
+                n,
+                label,
+                what,
+            }
         })
         .collect();
     for (i, point) in points.iter().enumerate() {
@@ -486,25 +650,47 @@ fn measure_group<'d>(
             ..Default::default()
         };
         if i < pool.len() {
-            pool[i].reconfigure(opts).map_err(|e| format!("{}: {e}", point.what))?;
+            pool[i]
+                .reconfigure(opts)
+                .map_err(|e| format!("{}: {e}", point.what))?;
         } else {
-            pool.push(Renderer::with_scene(device, &scene.0, scene.1.clone(), opts).map_err(|e| format!("{}: {e}", point.what))?);
+            pool.push(
+                Renderer::with_scene(device, &scene.0, scene.1.clone(), opts)
+                    .map_err(|e| format!("{}: {e}", point.what))?,
+            );
         }
-        pool[i].start().map_err(|e| format!("{}: {e}", point.what))?;
+        pool[i]
+            .start()
+            .map_err(|e| format!("{}: {e}", point.what))?;
     }
     let renderers = &mut pool[..points.len()];
     let k = renderers.len();
     let budget = plan.time.as_secs_f64();
     let mut spent = vec![0f64; k];
     let mut stats = vec![RenderStats::default(); k];
-    let name = format!("{} {}{} N={group_n}", spec.label, column.title, if d > 1 { format!(" D{d}") } else { String::new() });
+    let name = format!(
+        "{} {}{} N={group_n}",
+        spec.label,
+        column.title,
+        if d > 1 {
+            format!(" D{d}")
+        } else {
+            String::new()
+        }
+    );
     for slice in 0..plan.slices {
         let until = Budget::KernelTime(plan.time * (slice + 1) / plan.slices);
         // The first turn of a slice may meet clocks lowered by whatever the host did
         // before it: it rotates, so that no configuration always has it.
         for j in 0..k {
             let i = (slice as usize + j) % k;
-            bar.set_message(format!("[{}/{total}] {name}: slice {}/{} {}", first + 1, slice + 1, plan.slices, points[i].label));
+            bar.set_message(format!(
+                "[{}/{total}] {name}: slice {}/{} {}",
+                first + 1,
+                slice + 1,
+                plan.slices,
+                points[i].label
+            ));
             stats[i] = renderers[i]
                 .advance_with(until, |_, s| {
                     spent[i] = (s.kernel.total().as_secs_f64() / budget).min(1.0);
@@ -538,15 +724,31 @@ fn reference_image(
     index: u64,
     log: &dyn Fn(String),
 ) -> Result<Image, String> {
-    let path = plan.out_dir.join(format!("reference_{}_{w}x{h}.exr", spec.label));
+    let path = plan
+        .out_dir
+        .join(format!("reference_{}_{w}x{h}.exr", spec.label));
     if path.exists() {
         match read_exr(&path) {
             Ok(img) if (img.width, img.height) == (w, h) => {
-                log(format!("{}: reusing the reference {}", spec.label, path.display()));
+                log(format!(
+                    "{}: reusing the reference {}",
+                    spec.label,
+                    path.display()
+                ));
                 return Ok(img);
             }
-            Ok(img) => log(format!("{}: {} is {}x{}, not {w}x{h}: rendering it again", spec.label, path.display(), img.width, img.height)),
-            Err(e) => log(format!("{}: cannot read {} ({e}): rendering it again", spec.label, path.display())),
+            Ok(img) => log(format!(
+                "{}: {} is {}x{}, not {w}x{h}: rendering it again",
+                spec.label,
+                path.display(),
+                img.width,
+                img.height
+            )),
+            Err(e) => log(format!(
+                "{}: cannot read {} ({e}): rendering it again",
+                spec.label,
+                path.display()
+            )),
         }
     }
     let opts = RenderOptions {
@@ -558,7 +760,8 @@ fn reference_image(
         integrator: plan.integrator,
         ..Default::default()
     };
-    let (image, stats) = render(device, scene, opts, bar, index).map_err(|e| format!("{} reference: {e}", spec.label))?;
+    let (image, stats) = render(device, scene, opts, bar, index)
+        .map_err(|e| format!("{} reference: {e}", spec.label))?;
     output::write_exr(&path, &image, &[]).map_err(|e| e.to_string())?;
     log(format!(
         "{}: reference {:.1} paths/pixel in {:.2} s kernel time, wrote {}",
@@ -578,13 +781,23 @@ fn read_exr(path: &Path) -> Result<Image, String> {
     }
     let img = exr::prelude::read_first_rgba_layer_from_file(
         path,
-        |size, _| Pixels { width: size.width(), data: vec![Vec3::ZERO; size.width() * size.height()] },
-        |p: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| p.data[pos.y() * p.width + pos.x()] = Vec3::new(r, g, b),
+        |size, _| Pixels {
+            width: size.width(),
+            data: vec![Vec3::ZERO; size.width() * size.height()],
+        },
+        |p: &mut Pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            p.data[pos.y() * p.width + pos.x()] = Vec3::new(r, g, b)
+        },
     )
     .map_err(|e| e.to_string())?;
     let size = img.layer_data.size;
     let pixels = img.layer_data.channel_data.pixels.data;
-    Ok(Image { width: size.width() as u32, height: size.height() as u32, paths: vec![0; pixels.len()], pixels })
+    Ok(Image {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        paths: vec![0; pixels.len()],
+        pixels,
+    })
 }
 
 /// RMS error in percent: the root mean square of (image - reference) over all pixels and
@@ -710,42 +923,73 @@ struct Fonts {
     desc: u32,
     label: u32,
 }
-const SVG_FONTS: Fonts = Fonts { title: 24, caption: 17, desc: 15, label: 13 };
-const PNG_FONTS: Fonts = Fonts { title: 36, caption: 36, desc: 18, label: 18 };
+const SVG_FONTS: Fonts = Fonts {
+    title: 24,
+    caption: 17,
+    desc: 15,
+    label: 13,
+};
+const PNG_FONTS: Fonts = Fonts {
+    title: 36,
+    caption: 36,
+    desc: 18,
+    label: 18,
+};
 /// Size of one panel (one column of the figure).
 const PANEL_SIZE: (u32, u32) = (650, 650);
 
 fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<PathBuf>, String> {
     let mut written = Vec::new();
     let mut figs: Vec<(String, Figure)> = Vec::new();
-    let fig = |d: u32, metric: fn(&Row) -> f64, title: String, y_label, legend, y_from_zero| Figure {
-        title,
-        y_label,
-        legend,
-        y_from_zero,
-        panels: plan
-            .columns
-            .iter()
-            .map(|col| {
-                let sel = |r: &&Row| r.scene == scene && r.interleave == d && r.column == *col;
-                let mut normal: Vec<(f64, f64)> = rows.iter().filter(sel).filter(|r| r.n.is_none()).map(|r| (r.group_n as f64, metric(r))).collect();
-                normal.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let curves = plan
-                    .configs_of(col)
-                    .iter()
-                    .enumerate()
-                    .map(|(i, alg)| {
-                        let mut pts: Vec<(f64, f64)> =
-                            rows.iter().filter(sel).filter(|r| r.config == alg.name()).filter_map(|r| Some((r.n? as f64, metric(r)))).collect();
-                        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                        Curve { name: format!("{}{}", alg.name(), col.suffix), color: PALETTE[i % PALETTE.len()], points: pts }
-                    })
-                    .collect();
-                Panel { title: col.title, normal, curves }
-            })
-            .collect(),
-    };
-    let budget = format!("{:.3} s kernel time per point, round-robin per N", plan.time.as_secs_f64());
+    let fig =
+        |d: u32, metric: fn(&Row) -> f64, title: String, y_label, legend, y_from_zero| Figure {
+            title,
+            y_label,
+            legend,
+            y_from_zero,
+            panels: plan
+                .columns
+                .iter()
+                .map(|col| {
+                    let sel = |r: &&Row| r.scene == scene && r.interleave == d && r.column == *col;
+                    let mut normal: Vec<(f64, f64)> = rows
+                        .iter()
+                        .filter(sel)
+                        .filter(|r| r.n.is_none())
+                        .map(|r| (r.group_n as f64, metric(r)))
+                        .collect();
+                    normal.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    let curves = plan
+                        .configs_of(col)
+                        .iter()
+                        .enumerate()
+                        .map(|(i, alg)| {
+                            let mut pts: Vec<(f64, f64)> = rows
+                                .iter()
+                                .filter(sel)
+                                .filter(|r| r.config == alg.name())
+                                .filter_map(|r| Some((r.n? as f64, metric(r))))
+                                .collect();
+                            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                            Curve {
+                                name: format!("{}{}", alg.name(), col.suffix),
+                                color: PALETTE[i % PALETTE.len()],
+                                points: pts,
+                            }
+                        })
+                        .collect();
+                    Panel {
+                        title: col.title,
+                        normal,
+                        curves,
+                    }
+                })
+                .collect(),
+        };
+    let budget = format!(
+        "{:.3} s kernel time per point, round-robin per N",
+        plan.time.as_secs_f64()
+    );
     figs.push((
         format!("fig4_{scene}"),
         fig(
@@ -759,7 +1003,14 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
     ));
     figs.push((
         format!("fig5_{scene}"),
-        fig(1, |r| r.rms_percent, format!("Fig. 5, {scene}: RMS error vs N ({budget})"), "RMS error vs reference (%)", SeriesLabelPosition::UpperRight, false),
+        fig(
+            1,
+            |r| r.rms_percent,
+            format!("Fig. 5, {scene}: RMS error vs N ({budget})"),
+            "RMS error vs reference (%)",
+            SeriesLabelPosition::UpperRight,
+            false,
+        ),
     ));
     for &d in plan.interleaves.iter().filter(|&&d| d > 1) {
         figs.push((
@@ -784,7 +1035,8 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
         let mut svg = String::new();
         {
             let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-            draw_figure(root, fig, x, &ticks, y, &SVG_FONTS).map_err(|e| format!("cannot draw {}: {e}", svg_path.display()))?;
+            draw_figure(root, fig, x, &ticks, y, &SVG_FONTS)
+                .map_err(|e| format!("cannot draw {}: {e}", svg_path.display()))?;
         }
         output::write_text(&svg_path, &svg).map_err(|e| e.to_string())?;
         written.push(svg_path);
@@ -794,7 +1046,8 @@ fn write_scene_figures(plan: &Plan, scene: &str, rows: &[Row]) -> Result<Vec<Pat
         let mut buf = vec![255u8; (w * h * 3) as usize];
         {
             let root = TextBitmap(BitMapBackend::with_buffer(&mut buf, size)).into_drawing_area();
-            draw_figure(root, fig, x, &ticks, y, &PNG_FONTS).map_err(|e| format!("cannot draw {}: {e}", png_path.display()))?;
+            draw_figure(root, fig, x, &ticks, y, &PNG_FONTS)
+                .map_err(|e| format!("cannot draw {}: {e}", png_path.display()))?;
         }
         write_png_rgb(&png_path, size, &buf)?;
         written.push(png_path);
@@ -813,8 +1066,19 @@ fn x_range(ns: &[u32]) -> (f64, f64) {
 }
 
 fn y_range(fig: &Figure) -> (f64, f64) {
-    let values = fig.panels.iter().flat_map(|p| p.normal.iter().chain(p.curves.iter().flat_map(|c| c.points.iter())).map(|v| v.1)).filter(|v| v.is_finite());
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let values = fig
+        .panels
+        .iter()
+        .flat_map(|p| {
+            p.normal
+                .iter()
+                .chain(p.curves.iter().flat_map(|c| c.points.iter()))
+                .map(|v| v.1)
+        })
+        .filter(|v| v.is_finite());
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
     if !lo.is_finite() {
         return (0.0, 1.0);
     }
@@ -836,8 +1100,14 @@ fn draw_figure<DB: DrawingBackend>(
     // Enough decimals to tell the y ticks apart: 1 for a span of ~10, 0 from ~100.
     let decimals = (1 - (y1 - y0).log10().floor() as i32).clamp(0, 4) as usize;
     root.fill(&WHITE).map_err(e)?;
-    let root = root.titled(&fig.title, ("sans-serif", fonts.title)).map_err(e)?;
-    for (area, panel) in root.split_evenly((1, fig.panels.len())).iter().zip(&fig.panels) {
+    let root = root
+        .titled(&fig.title, ("sans-serif", fonts.title))
+        .map_err(e)?;
+    for (area, panel) in root
+        .split_evenly((1, fig.panels.len()))
+        .iter()
+        .zip(&fig.panels)
+    {
         let mut chart = ChartBuilder::on(area)
             .caption(panel.title, ("sans-serif", fonts.caption))
             .margin(14)
@@ -856,18 +1126,40 @@ fn draw_figure<DB: DrawingBackend>(
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(e)?;
-        let normal: Vec<(f64, f64)> = panel.normal.iter().copied().filter(|p| p.1.is_finite()).collect();
+        let normal: Vec<(f64, f64)> = panel
+            .normal
+            .iter()
+            .copied()
+            .filter(|p| p.1.is_finite())
+            .collect();
         if !normal.is_empty() {
             // `normal` does not depend on N, but it is measured in every group, alongside the
             // configurations it is compared with: its line goes through those values (flat
             // across the panel when the sweep has one N).
-            let dashed = if normal.len() == 1 { vec![(x0, normal[0].1), (x1, normal[0].1)] } else { normal.clone() };
-            chart.draw_series(normal.iter().map(|&p| Circle::new(p, 3, BLACK.filled()))).map_err(e)?;
-            chart.draw_series(DashedLineSeries::new(dashed, 10, 6, line(BLACK))).map_err(e)?.label("normal").legend(|(x, y)| {
-                EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (8, 0)], line(BLACK)) + PathElement::new(vec![(13, 0), (20, 0)], line(BLACK))
-            });
+            let dashed = if normal.len() == 1 {
+                vec![(x0, normal[0].1), (x1, normal[0].1)]
+            } else {
+                normal.clone()
+            };
+            chart
+                .draw_series(normal.iter().map(|&p| Circle::new(p, 3, BLACK.filled())))
+                .map_err(e)?;
+            chart
+                .draw_series(DashedLineSeries::new(dashed, 10, 6, line(BLACK)))
+                .map_err(e)?
+                .label("normal")
+                .legend(|(x, y)| {
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (8, 0)], line(BLACK))
+                        + PathElement::new(vec![(13, 0), (20, 0)], line(BLACK))
+                });
         }
-        for Curve { name, color, points } in &panel.curves {
+        for Curve {
+            name,
+            color,
+            points,
+        } in &panel.curves
+        {
             let color = *color;
             let pts: Vec<(f64, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
             chart
@@ -932,34 +1224,77 @@ impl<'a> DrawingBackend for TextBitmap<'a> {
     fn present(&mut self) -> BackendResult<(), Self::ErrorType> {
         self.0.present()
     }
-    fn draw_pixel(&mut self, point: BackendCoord, color: BackendColor) -> BackendResult<(), Self::ErrorType> {
+    fn draw_pixel(
+        &mut self,
+        point: BackendCoord,
+        color: BackendColor,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.draw_pixel(point, color)
     }
-    fn draw_line<S: Style>(&mut self, from: BackendCoord, to: BackendCoord, style: &S) -> BackendResult<(), Self::ErrorType> {
+    fn draw_line<S: Style>(
+        &mut self,
+        from: BackendCoord,
+        to: BackendCoord,
+        style: &S,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.draw_line(from, to, style)
     }
-    fn draw_rect<S: Style>(&mut self, ul: BackendCoord, br: BackendCoord, style: &S, fill: bool) -> BackendResult<(), Self::ErrorType> {
+    fn draw_rect<S: Style>(
+        &mut self,
+        ul: BackendCoord,
+        br: BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.draw_rect(ul, br, style, fill)
     }
-    fn draw_path<S: Style, I: IntoIterator<Item = BackendCoord>>(&mut self, path: I, style: &S) -> BackendResult<(), Self::ErrorType> {
+    fn draw_path<S: Style, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.draw_path(path, style)
     }
-    fn draw_circle<S: Style>(&mut self, center: BackendCoord, radius: u32, style: &S, fill: bool) -> BackendResult<(), Self::ErrorType> {
+    fn draw_circle<S: Style>(
+        &mut self,
+        center: BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.draw_circle(center, radius, style, fill)
     }
-    fn fill_polygon<S: Style, I: IntoIterator<Item = BackendCoord>>(&mut self, vert: I, style: &S) -> BackendResult<(), Self::ErrorType> {
+    fn fill_polygon<S: Style, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        vert: I,
+        style: &S,
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.fill_polygon(vert, style)
     }
-    fn blit_bitmap(&mut self, pos: BackendCoord, size: (u32, u32), src: &[u8]) -> BackendResult<(), Self::ErrorType> {
+    fn blit_bitmap(
+        &mut self,
+        pos: BackendCoord,
+        size: (u32, u32),
+        src: &[u8],
+    ) -> BackendResult<(), Self::ErrorType> {
         self.0.blit_bitmap(pos, size, src)
     }
 
-    fn estimate_text_size<T: BackendTextStyle>(&self, text: &str, style: &T) -> BackendResult<(u32, u32), Self::ErrorType> {
+    fn estimate_text_size<T: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &T,
+    ) -> BackendResult<(u32, u32), Self::ErrorType> {
         let s = Self::scale(style.size()) as u32;
         Ok((8 * s * text.chars().count() as u32, 8 * s))
     }
 
-    fn draw_text<T: BackendTextStyle>(&mut self, text: &str, style: &T, pos: BackendCoord) -> BackendResult<(), Self::ErrorType> {
+    fn draw_text<T: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &T,
+        pos: BackendCoord,
+    ) -> BackendResult<(), Self::ErrorType> {
         let color = style.color();
         if color.alpha == 0.0 {
             return Ok(());
@@ -979,7 +1314,11 @@ impl<'a> DrawingBackend for TextBitmap<'a> {
         let transform = style.transform();
         let (bw, bh) = self.get_size();
         for (i, ch) in text.chars().enumerate() {
-            let code = if ch.is_ascii() { ch as usize } else { '?' as usize };
+            let code = if ch.is_ascii() {
+                ch as usize
+            } else {
+                '?' as usize
+            };
             let glyph = font8x8::legacy::BASIC_LEGACY[code];
             for (gy, row) in glyph.iter().enumerate() {
                 for gx in 0..8 {
@@ -1010,7 +1349,12 @@ mod tests {
 
     #[test]
     fn rms_percent_is_relative_to_the_reference() {
-        let img = |v: f32| Image { width: 2, height: 1, pixels: vec![Vec3::splat(v); 2], paths: vec![1; 2] };
+        let img = |v: f32| Image {
+            width: 2,
+            height: 1,
+            pixels: vec![Vec3::splat(v); 2],
+            paths: vec![1; 2],
+        };
         assert_eq!(rms_percent(&img(1.0), &img(1.0)), 0.0);
         assert!((rms_percent(&img(1.1), &img(1.0)) - 10.0).abs() < 1e-4);
         assert!((rms_percent(&img(0.0), &img(2.0)) - 100.0).abs() < 1e-9);
@@ -1025,13 +1369,19 @@ mod tests {
 
     #[test]
     fn file_labels_are_safe_names() {
-        assert_eq!(file_label("../shared/scenes/cornell-box/scene.xml"), "cornell-box");
+        assert_eq!(
+            file_label("../shared/scenes/cornell-box/scene.xml"),
+            "cornell-box"
+        );
         assert_eq!(file_label("a b/my scene.xml"), "my_scene");
     }
 
     #[test]
     fn csv_quotes_fields_with_commas() {
-        assert_eq!(csv_field("llvmpipe (LLVM 15, 256 bits)"), "\"llvmpipe (LLVM 15, 256 bits)\"");
+        assert_eq!(
+            csv_field("llvmpipe (LLVM 15, 256 bits)"),
+            "\"llvmpipe (LLVM 15, 256 bits)\""
+        );
         assert_eq!(csv_field("warp_rr (NO)"), "warp_rr (NO)");
     }
 }

@@ -18,7 +18,10 @@ fn tempdir() -> PathBuf {
     let d = std::env::temp_dir().join(format!(
         "cohort-figures-{}-{}",
         std::process::id(),
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos()
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos()
     ));
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -64,7 +67,13 @@ fn parse_csv(text: &str) -> (Vec<String>, Vec<HashMap<String, String>>) {
     let rows = lines
         .map(|l| {
             let f = split(l);
-            assert_eq!(f.len(), header.len(), "row has {} fields, header {}: {l}", f.len(), header.len());
+            assert_eq!(
+                f.len(),
+                header.len(),
+                "row has {} fields, header {}: {l}",
+                f.len(),
+                header.len()
+            );
             header.iter().cloned().zip(f).collect()
         })
         .collect();
@@ -72,13 +81,24 @@ fn parse_csv(text: &str) -> (Vec<String>, Vec<HashMap<String, String>>) {
 }
 
 fn num(row: &HashMap<String, String>, key: &str) -> f64 {
-    row[key].parse::<f64>().unwrap_or_else(|_| panic!("{key} = `{}` is not a number in {row:?}", row[key]))
+    row[key]
+        .parse::<f64>()
+        .unwrap_or_else(|_| panic!("{key} = `{}` is not a number in {row:?}", row[key]))
 }
 
 fn assert_image(path: &Path, magic: &[u8]) {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert!(bytes.len() > 5_000, "{} is only {} bytes", path.display(), bytes.len());
-    assert!(bytes.windows(magic.len()).take(64).any(|w| w == magic), "{} lacks {magic:?}", path.display());
+    assert!(
+        bytes.len() > 5_000,
+        "{} is only {} bytes",
+        path.display(),
+        bytes.len()
+    );
+    assert!(
+        bytes.windows(magic.len()).take(64).any(|w| w == magic),
+        "{} lacks {magic:?}",
+        path.display()
+    );
 }
 
 #[test]
@@ -87,7 +107,12 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
         return;
     }
     let dir = tempdir();
-    let out = cohort().args(TINY).arg("--out-dir").arg(&dir).output().unwrap();
+    let out = cohort()
+        .args(TINY)
+        .arg("--out-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
 
@@ -111,7 +136,10 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
         "group_n",
         "rms_at_1spp",
     ] {
-        assert!(header.iter().any(|h| h == col), "missing column {col} in {header:?}");
+        assert!(
+            header.iter().any(|h| h == col),
+            "missing column {col} in {header:?}"
+        );
     }
     // D in {1, 5} x 3 columns x 2 N, each a group of normal + 2 configs.
     assert_eq!(rows.len(), 2 * 3 * 2 * (1 + 2), "{rows:#?}");
@@ -119,8 +147,15 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     for d in ["1", "5"] {
         for (rr, compaction) in [("path", "true"), ("group", "true"), ("group", "false")] {
             for group_n in ["4", "16"] {
-                let sel: Vec<_> =
-                    rows.iter().filter(|r| r["interleave"] == d && r["rr"] == rr && r["compaction"] == compaction && r["group_n"] == group_n).collect();
+                let sel: Vec<_> = rows
+                    .iter()
+                    .filter(|r| {
+                        r["interleave"] == d
+                            && r["rr"] == rr
+                            && r["compaction"] == compaction
+                            && r["group_n"] == group_n
+                    })
+                    .collect();
                 let what = format!("D={d} rr={rr} compaction={compaction} N={group_n}");
                 assert_eq!(sel.len(), 3, "{what}");
                 let normal: Vec<_> = sel.iter().filter(|r| r["config"] == "normal").collect();
@@ -133,10 +168,16 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
                     assert_eq!(point[0]["n"], group_n, "{config} {what}");
                     // Against the normal of its own group, not another group's.
                     let ratio = num(point[0], "paths_per_s") / num(normal[0], "paths_per_s");
-                    assert!(close(num(point[0], "paths_per_s_vs_normal"), ratio), "{config} {what}: {point:?} vs {normal:?}");
+                    assert!(
+                        close(num(point[0], "paths_per_s_vs_normal"), ratio),
+                        "{config} {what}: {point:?} vs {normal:?}"
+                    );
                 }
                 if compaction == "false" {
-                    assert!(sel.iter().all(|r| num(r, "kernel_ms_compact") == 0.0), "no compaction ran");
+                    assert!(
+                        sel.iter().all(|r| num(r, "kernel_ms_compact") == 0.0),
+                        "no compaction ran"
+                    );
                 }
             }
         }
@@ -144,14 +185,34 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     for r in &rows {
         assert_eq!(r["scene"], "cornell");
         assert_eq!((num(r, "width"), num(r, "height")), (32.0, 32.0));
-        for key in ["paths_per_pixel", "paths_per_s", "rays_per_s", "kernel_ms_traverse", "kernel_ms_extend", "kernel_ms_total", "paths_per_s_vs_normal"] {
+        for key in [
+            "paths_per_pixel",
+            "paths_per_s",
+            "rays_per_s",
+            "kernel_ms_traverse",
+            "kernel_ms_extend",
+            "kernel_ms_total",
+            "paths_per_s_vs_normal",
+        ] {
             let v = num(r, key);
             assert!(v.is_finite() && v > 0.0, "{key} = {v} in {r:?}");
         }
         let rms = num(r, "rms_percent");
-        assert!(rms.is_finite() && rms > 0.0 && rms < 1000.0, "rms {rms} in {r:?}");
-        assert!(close(num(r, "rms_at_1spp"), rms * num(r, "paths_per_pixel").sqrt()), "rms_at_1spp in {r:?}");
-        assert!(num(r, "kernel_ms_total") >= 50.0, "the 0.05 s budget was spent: {r:?}");
+        assert!(
+            rms.is_finite() && rms > 0.0 && rms < 1000.0,
+            "rms {rms} in {r:?}"
+        );
+        assert!(
+            close(
+                num(r, "rms_at_1spp"),
+                rms * num(r, "paths_per_pixel").sqrt()
+            ),
+            "rms_at_1spp in {r:?}"
+        );
+        assert!(
+            num(r, "kernel_ms_total") >= 50.0,
+            "the 0.05 s budget was spent: {r:?}"
+        );
     }
 
     for stem in ["fig4_cornell", "fig5_cornell", "fig7_cornell_d5"] {
@@ -163,7 +224,10 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
         }
     }
     // No temporary files are left behind.
-    let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
 
     // A second (smaller) run reuses the cached reference instead of rendering it again.
@@ -197,7 +261,11 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("reusing the reference"), "{stderr}");
-    assert_eq!(std::fs::metadata(&reference).unwrap().modified().unwrap(), before, "the reference was rewritten");
+    assert_eq!(
+        std::fs::metadata(&reference).unwrap().modified().unwrap(),
+        before,
+        "the reference was rewritten"
+    );
     let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
     assert_eq!(rows.len(), 3, "normal once per column");
     assert!(rows.iter().all(|r| r["group_n"] == "4"));
@@ -205,8 +273,33 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
 
     // Whole-group termination columns: every configuration but the grid (which cannot vote).
     let out = cohort()
-        .args(["figures", "--scenes", "cornell", "--configs", "warp,grid", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32"])
-        .args(["--backend", "vulkan", "--interleave", "none", "--columns", "whole,whole-no", "--end-continue", "0.4", "--slices", "2"])
+        .args([
+            "figures",
+            "--scenes",
+            "cornell",
+            "--configs",
+            "warp,grid",
+            "--n",
+            "4",
+            "--time",
+            "0.02",
+            "--width",
+            "32",
+            "--height",
+            "32",
+        ])
+        .args([
+            "--backend",
+            "vulkan",
+            "--interleave",
+            "none",
+            "--columns",
+            "whole,whole-no",
+            "--end-continue",
+            "0.4",
+            "--slices",
+            "2",
+        ])
         .arg("--out-dir")
         .arg(&dir)
         .output()
@@ -215,13 +308,45 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     assert!(out.status.success(), "{stderr}");
     let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
     assert_eq!(rows.len(), 4, "normal and warp, in two columns: {rows:#?}");
-    assert!(rows.iter().all(|r| r["rr"] == "whole" && r["config"] != "grid"), "{rows:#?}");
-    assert_eq!(rows.iter().filter(|r| r["compaction"] == "false").count(), 2);
+    assert!(
+        rows.iter()
+            .all(|r| r["rr"] == "whole" && r["config"] != "grid"),
+        "{rows:#?}"
+    );
+    assert_eq!(
+        rows.iter().filter(|r| r["compaction"] == "false").count(),
+        2
+    );
 
     // The same sweep with light sampling: coherent configurations run with either integrator.
     let out = cohort()
-        .args(["figures", "--scenes", "cornell", "--configs", "warp", "--n", "4", "--time", "0.02", "--width", "32", "--height", "32"])
-        .args(["--backend", "vulkan", "--interleave", "none", "--columns", "path", "--slices", "1", "--integrator", "nee"])
+        .args([
+            "figures",
+            "--scenes",
+            "cornell",
+            "--configs",
+            "warp",
+            "--n",
+            "4",
+            "--time",
+            "0.02",
+            "--width",
+            "32",
+            "--height",
+            "32",
+        ])
+        .args([
+            "--backend",
+            "vulkan",
+            "--interleave",
+            "none",
+            "--columns",
+            "path",
+            "--slices",
+            "1",
+            "--integrator",
+            "nee",
+        ])
         .arg("--out-dir")
         .arg(&dir)
         .output()
@@ -230,7 +355,11 @@ fn tiny_sweep_writes_csv_plots_and_reuses_the_reference() {
     assert!(out.status.success(), "{stderr}");
     let (_, rows) = parse_csv(&std::fs::read_to_string(dir.join("figures.csv")).unwrap());
     assert_eq!(rows.len(), 2, "normal and warp: {rows:#?}");
-    assert!(rows.iter().all(|r| num(r, "rms_percent").is_finite() && num(r, "rms_percent") > 0.0), "{rows:#?}");
+    assert!(
+        rows.iter()
+            .all(|r| num(r, "rms_percent").is_finite() && num(r, "rms_percent") > 0.0),
+        "{rows:#?}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -254,10 +383,19 @@ fn bad_lists_fail_naming_the_value() {
         (vec!["--end-continue", "0"], "--end-continue"),
         (vec!["--integrator", "photon"], "photon"),
     ] {
-        let out = cohort().arg("figures").args(&args).arg("--out-dir").arg(&dir).output().unwrap();
+        let out = cohort()
+            .arg("figures")
+            .args(&args)
+            .arg("--out-dir")
+            .arg(&dir)
+            .output()
+            .unwrap();
         assert!(!out.status.success(), "{args:?} should fail");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains("error") && err.contains(needle), "{args:?}: {err}");
+        assert!(
+            err.contains("error") && err.contains(needle),
+            "{args:?}: {err}"
+        );
     }
     // Nothing was rendered or written.
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);

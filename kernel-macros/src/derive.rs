@@ -13,15 +13,24 @@ use crate::rewrite::{err, err_at};
 pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
     let name = &input.ident;
     if !input.generics.params.is_empty() {
-        return err_at(&input.generics, "`#[derive(GpuType)]` does not support generic structs");
+        return err_at(
+            &input.generics,
+            "`#[derive(GpuType)]` does not support generic structs",
+        );
     }
     let repr_c = input.attrs.iter().any(|a| {
-        a.path().is_ident("repr") && a.parse_args_with(syn::punctuated::Punctuated::<syn::Ident, syn::Token![,]>::parse_terminated)
+        a.path().is_ident("repr")
+            && a.parse_args_with(
+                syn::punctuated::Punctuated::<syn::Ident, syn::Token![,]>::parse_terminated,
+            )
             .map(|l| l.iter().any(|i| i == "C"))
             .unwrap_or(false)
     });
     if !repr_c {
-        return err(name.span(), "`#[derive(GpuType)]` needs `#[repr(C)]` so that the host layout is fixed");
+        return err(
+            name.span(),
+            "`#[derive(GpuType)]` needs `#[repr(C)]` so that the host layout is fixed",
+        );
     }
     let syn::Data::Struct(s) = &input.data else {
         return err(name.span(), "`#[derive(GpuType)]` supports structs only");
@@ -62,7 +71,11 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
         // (offset) or type (size) as its span, not the field's first token (`pub`).
         let name_span = fname.span();
         let ty_span = match ty {
-            syn::Type::Path(p) => p.path.segments.last().map_or_else(|| ty.span(), |s| s.ident.span()),
+            syn::Type::Path(p) => p
+                .path
+                .segments
+                .last()
+                .map_or_else(|| ty.span(), |s| s.ident.span()),
             _ => ty.span(),
         };
         checks.push(quote_spanned! {name_span=>

@@ -36,7 +36,10 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
     };
     for arg in &sig.inputs {
         let FnArg::Typed(pt) = arg else {
-            return err_at(arg, "kernel helpers take no `self`; use an associated function (`fn f(x: T)`)");
+            return err_at(
+                arg,
+                "kernel helpers take no `self`; use an associated function (`fn f(x: T)`)",
+            );
         };
         let (name, mutable) = match &*pt.pat {
             Pat::Ident(i) => (i.ident.clone(), i.mutability.is_some()),
@@ -44,32 +47,39 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
         };
         let span = pt.ty.span();
         match &*pt.ty {
-            Type::Reference(r) => match &*r.elem {
-                Type::Slice(s) => {
-                    let elem = &s.elem;
-                    out.inline = true;
-                    out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Buffer<#elem> });
-                    out.binds.push((name.to_string(), Bind::Root));
+            Type::Reference(r) => {
+                match &*r.elem {
+                    Type::Slice(s) => {
+                        let elem = &s.elem;
+                        out.inline = true;
+                        out.params
+                            .push(quote_spanned! {span=> #name: ::cohort::ir::Buffer<#elem> });
+                        out.binds.push((name.to_string(), Bind::Root));
+                    }
+                    elem if r.mutability.is_some() => {
+                        out.params.push(quote_spanned! {span=> #name: impl ::cohort::ir::AsPlace<Target = #elem> });
+                        out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::AsPlace::as_place(&#name); });
+                        out.arg_names.push(name.clone());
+                        out.binds.push((name.to_string(), Bind::Root));
+                    }
+                    elem => {
+                        out.params
+                            .push(quote_spanned! {span=> #name: impl ::cohort::ir::ToVal<#elem> });
+                        out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::ToVal::to_val(#name); });
+                        out.arg_names.push(name.clone());
+                        out.binds.push((name.to_string(), Bind::Val));
+                    }
                 }
-                elem if r.mutability.is_some() => {
-                    out.params.push(quote_spanned! {span=> #name: impl ::cohort::ir::AsPlace<Target = #elem> });
-                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::AsPlace::as_place(&#name); });
-                    out.arg_names.push(name.clone());
-                    out.binds.push((name.to_string(), Bind::Root));
-                }
-                elem => {
-                    out.params.push(quote_spanned! {span=> #name: impl ::cohort::ir::ToVal<#elem> });
-                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::ToVal::to_val(#name); });
-                    out.arg_names.push(name.clone());
-                    out.binds.push((name.to_string(), Bind::Val));
-                }
-            },
+            }
             ty => {
-                out.params.push(quote_spanned! {span=> #name: ::cohort::ir::Val<#ty> });
+                out.params
+                    .push(quote_spanned! {span=> #name: ::cohort::ir::Val<#ty> });
                 out.arg_names.push(name.clone());
                 if mutable {
                     let lit = name.to_string();
-                    out.prelude.push(quote_spanned! {span=> let #name = ::cohort::ir::Var::new(#lit, #name); });
+                    out.prelude.push(
+                        quote_spanned! {span=> let #name = ::cohort::ir::Var::new(#lit, #name); },
+                    );
                     out.binds.push((name.to_string(), Bind::Var));
                 } else {
                     out.binds.push((name.to_string(), Bind::Val));
@@ -91,7 +101,13 @@ fn ir_signature(sig: &Signature) -> syn::Result<IrSig> {
 }
 
 /// Builds the body of an IR function: `function::<Key>(..)` or, inlined, the body.
-fn ir_body(sig: &Signature, block: &syn::Block, key: TokenStream, extra_generics: &[String], display: &str) -> syn::Result<(IrSig, TokenStream)> {
+fn ir_body(
+    sig: &Signature,
+    block: &syn::Block,
+    key: TokenStream,
+    extra_generics: &[String],
+    display: &str,
+) -> syn::Result<(IrSig, TokenStream)> {
     let s = ir_signature(sig)?;
     let mut rw = Rewriter::new();
     for g in sig.generics.type_params() {
@@ -162,14 +178,19 @@ pub fn expand_fn(mut f: syn::ItemFn) -> syn::Result<TokenStream> {
     for arg in &f.sig.inputs {
         if let FnArg::Typed(pt) = arg {
             if let Pat::Ident(i) = &*pt.pat {
-                let set = if matches!(&*pt.ty, Type::Reference(_)) { &mut up.memory } else { &mut up.uniform };
+                let set = if matches!(&*pt.ty, Type::Reference(_)) {
+                    &mut up.memory
+                } else {
+                    &mut up.uniform
+                };
                 set.insert(i.ident.to_string());
             }
         }
     }
     up.generics = tps.iter().map(|t| t.to_string()).collect();
     let calls = crate::uniformity::check(&f.block, &up)?;
-    let (uniform_call_checks, needs_uniform) = crate::uniformity::call_checks(&calls, Some(&f.sig.ident));
+    let (uniform_call_checks, needs_uniform) =
+        crate::uniformity::call_checks(&calls, Some(&f.sig.ident));
     let (s, body) = ir_body(&f.sig, &f.block, key, &[], &f.sig.ident.to_string())?;
     crate::host::host_block(&mut f.block);
     let name = &f.sig.ident;
@@ -219,7 +240,8 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
             let decl = match &m.default {
                 Some(block) => {
                     let display = format!("{}_{}", trait_name, m.sig.ident);
-                    let (_, body) = ir_body(&m.sig, block, quote!(Self), &["Self".to_string()], &display)?;
+                    let (_, body) =
+                        ir_body(&m.sig, block, quote!(Self), &["Self".to_string()], &display)?;
                     quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens)] fn #ir_name #generics (#(#params),*) -> #ret { #body } }
                 }
                 None => quote! { #[doc(hidden)] fn #ir_name #generics (#(#params),*) -> #ret; },
@@ -246,9 +268,16 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
 pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
     let Some((_, trait_path, _)) = &i.trait_ else {
         let (it, ty) = (&i.impl_token, &i.self_ty);
-        return err_at(quote!(#it #ty), "`#[kernel_impl]` goes on `impl Trait for Type` of a `#[kernel_trait]`");
+        return err_at(
+            quote!(#it #ty),
+            "`#[kernel_impl]` goes on `impl Trait for Type` of a `#[kernel_trait]`",
+        );
     };
-    let trait_name = trait_path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
+    let trait_name = trait_path
+        .segments
+        .last()
+        .map(|s| s.ident.to_string())
+        .unwrap_or_default();
     let mut extra = Vec::new();
     for item in &i.items {
         if let syn::ImplItem::Fn(m) = item {
@@ -257,7 +286,13 @@ pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
             }
             let ir_name = format_ident!("__ir_{}", m.sig.ident);
             let display = format!("{}_{}", trait_name, m.sig.ident);
-            let (s, body) = ir_body(&m.sig, &m.block, quote!(Self), &["Self".to_string()], &display)?;
+            let (s, body) = ir_body(
+                &m.sig,
+                &m.block,
+                quote!(Self),
+                &["Self".to_string()],
+                &display,
+            )?;
             let params = &s.params;
             let ret = &s.ret;
             let generics = &m.sig.generics;
@@ -290,8 +325,15 @@ fn refuse_self_call(f: &syn::ItemFn) -> syn::Result<()> {
             if let syn::Expr::Path(p) = &*c.func {
                 let segs = &p.path.segments;
                 let direct = segs.len() == 1
-                    || (segs.len() == 2 && matches!(segs[0].ident.to_string().as_str(), "self" | "super" | "crate" | "Self"));
-                if direct && segs.last().is_some_and(|s| &s.ident == self.name) && self.found.is_none() {
+                    || (segs.len() == 2
+                        && matches!(
+                            segs[0].ident.to_string().as_str(),
+                            "self" | "super" | "crate" | "Self"
+                        ));
+                if direct
+                    && segs.last().is_some_and(|s| &s.ident == self.name)
+                    && self.found.is_none()
+                {
                     self.found = Some(syn::spanned::Spanned::span(&c.func));
                 }
             }
@@ -300,7 +342,10 @@ fn refuse_self_call(f: &syn::ItemFn) -> syn::Result<()> {
         // A nested item's body is not this function's.
         fn visit_item(&mut self, _: &'ast syn::Item) {}
     }
-    let mut v = V { name: &f.sig.ident, found: None };
+    let mut v = V {
+        name: &f.sig.ident,
+        found: None,
+    };
     v.visit_block(&f.block);
     match v.found {
         Some(span) => Err(syn::Error::new(

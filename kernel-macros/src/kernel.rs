@@ -19,7 +19,10 @@ pub struct KernelAttr {
 
 impl Parse for KernelAttr {
     fn parse(input: ParseStream) -> syn::Result<Self> {
-        let mut attr = KernelAttr { workgroup: 64, group: quote!(::cohort::Group::Thread) };
+        let mut attr = KernelAttr {
+            workgroup: 64,
+            group: quote!(::cohort::Group::Thread),
+        };
         let mut group_block: Option<u32> = None;
         while !input.is_empty() {
             let key: syn::Ident = input.parse()?;
@@ -89,8 +92,19 @@ struct Param {
 }
 
 const BUILTINS: &[&str] = &[
-    "global_index", "local_index", "workgroup_index", "global_id", "local_id", "workgroup_id", "num_workgroups",
-    "workgroup_size", "subgroup_size", "subgroup_lane", "subgroup_invocation_id", "subgroup_id", "num_subgroups",
+    "global_index",
+    "local_index",
+    "workgroup_index",
+    "global_id",
+    "local_id",
+    "workgroup_id",
+    "num_workgroups",
+    "workgroup_size",
+    "subgroup_size",
+    "subgroup_lane",
+    "subgroup_invocation_id",
+    "subgroup_id",
+    "num_subgroups",
 ];
 
 /// The builtins whose value is a `glam::UVec3`; the others are `u32`.
@@ -100,11 +114,17 @@ const UVEC3_BUILTINS: &[&str] = &["global_id", "local_id", "workgroup_id", "num_
 /// `UVec3` under any path), so that a wrong type is reported as such rather than as a
 /// mismatch inside the generated code.
 fn check_builtin_type(builtin: &str, ty: &Type) -> syn::Result<()> {
-    let want = if UVEC3_BUILTINS.contains(&builtin) { "UVec3" } else { "u32" };
+    let want = if UVEC3_BUILTINS.contains(&builtin) {
+        "UVec3"
+    } else {
+        "u32"
+    };
     let ok = match ty {
-        Type::Path(p) if p.qself.is_none() => {
-            p.path.segments.last().is_some_and(|s| s.arguments.is_empty() && s.ident == want)
-        }
+        Type::Path(p) if p.qself.is_none() => p
+            .path
+            .segments
+            .last()
+            .is_some_and(|s| s.arguments.is_empty() && s.ident == want),
         Type::Paren(p) => return check_builtin_type(builtin, &p.elem),
         Type::Group(g) => return check_builtin_type(builtin, &g.elem),
         _ => false,
@@ -112,8 +132,20 @@ fn check_builtin_type(builtin: &str, ty: &Type) -> syn::Result<()> {
     if ok {
         return Ok(());
     }
-    let full = if want == "UVec3" { "UVec3` (`glam::UVec3`)" } else { "u32`" };
-    let found = ty.to_token_stream().to_string().replace(" :: ", "::").replace(":: ", "::").replace("& ", "&").replace(" <", "<").replace("< ", "<").replace(" >", ">");
+    let full = if want == "UVec3" {
+        "UVec3` (`glam::UVec3`)"
+    } else {
+        "u32`"
+    };
+    let found = ty
+        .to_token_stream()
+        .to_string()
+        .replace(" :: ", "::")
+        .replace(":: ", "::")
+        .replace("& ", "&")
+        .replace(" <", "<")
+        .replace("< ", "<")
+        .replace(" >", ">");
     err_at(ty, format!("builtin `{builtin}` is `{full}, not `{found}`"))
 }
 
@@ -142,10 +174,20 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
             let id: syn::Ident = a.parse_args()?;
             let s = id.to_string();
             if !BUILTINS.contains(&s.as_str()) {
-                return err_at(&id, format!("unknown builtin `{s}`; expected one of: {}", BUILTINS.join(", ")));
+                return err_at(
+                    &id,
+                    format!(
+                        "unknown builtin `{s}`; expected one of: {}",
+                        BUILTINS.join(", ")
+                    ),
+                );
             }
             check_builtin_type(&s, &pt.ty)?;
-            builtin = Some(if s == "subgroup_invocation_id" { format_ident!("subgroup_lane", span = id.span()) } else { id });
+            builtin = Some(if s == "subgroup_invocation_id" {
+                format_ident!("subgroup_lane", span = id.span())
+            } else {
+                id
+            });
         } else if a.path().is_ident("workgroup") {
             workgroup = true;
         } else {
@@ -225,7 +267,12 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             }
         }
     }
-    up.generics = f.sig.generics.type_params().map(|t| t.ident.to_string()).collect();
+    up.generics = f
+        .sig
+        .generics
+        .type_params()
+        .map(|t| t.ident.to_string())
+        .collect();
     let calls = uniformity::check(&f.block, &up)?;
     let (uniform_call_checks, _) = uniformity::call_checks(&calls, None);
     uniformity::check_grid_closures(&f.block, &up, &all_names)?;
@@ -248,7 +295,9 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         let pspan = name.span();
         match &p.kind {
             ParamKind::Builtin(b) => {
-                let FnArg::Typed(pt) = &f.sig.inputs[i] else { unreachable!() };
+                let FnArg::Typed(pt) = &f.sig.inputs[i] else {
+                    unreachable!()
+                };
                 let ty = &pt.ty;
                 decls.push(quote_spanned! {pspan=> let #name: ::cohort::ir::Val<#ty> = ::cohort::ir::builtin::#b(); });
                 rw.bind(&lit, Bind::Val);
@@ -344,13 +393,25 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         None if type_params.is_empty() => quote!(),
         None => quote!(where #(#static_bounds),*),
     };
-    let turbofish = if type_params.is_empty() { quote!() } else { quote!(::<#(#type_params),*>) };
-    let key_params = if type_params.is_empty() { quote!() } else { quote!(<#(#type_params),*>) };
+    let turbofish = if type_params.is_empty() {
+        quote!()
+    } else {
+        quote!(::<#(#type_params),*>)
+    };
+    let key_params = if type_params.is_empty() {
+        quote!()
+    } else {
+        quote!(<#(#type_params),*>)
+    };
     let line_col = quote_spanned! {span=> (line!(), column!()) };
 
     // Split off `<...>` to add a lifetime to launch functions.
     let gparams = &generics.params;
-    let launch_generics = if gparams.is_empty() { quote!(<'__grid>) } else { quote!(<'__grid, #gparams>) };
+    let launch_generics = if gparams.is_empty() {
+        quote!(<'__grid>)
+    } else {
+        quote!(<'__grid, #gparams>)
+    };
     let _ = impl_g;
 
     Ok(quote! {

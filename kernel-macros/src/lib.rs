@@ -40,7 +40,12 @@ pub fn kernel(attr: TokenStream, item: TokenStream) -> TokenStream {
 #[proc_macro_attribute]
 pub fn kernel_fn(attr: TokenStream, item: TokenStream) -> TokenStream {
     if !attr.is_empty() {
-        return syn::Error::new(proc_macro2::Span::call_site(), "`#[kernel_fn]` takes no arguments").into_compile_error().into();
+        return syn::Error::new(
+            proc_macro2::Span::call_site(),
+            "`#[kernel_fn]` takes no arguments",
+        )
+        .into_compile_error()
+        .into();
     }
     match syn::parse::<syn::ItemFn>(item) {
         Ok(f) => out(helper::expand_fn(f)),

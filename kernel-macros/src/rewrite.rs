@@ -31,13 +31,21 @@ pub fn is_builtin_type(name: &str) -> bool {
 }
 
 const BUILTIN_TYPES: &[&str] = &[
-    "f32", "u32", "i32", "usize", "bool", "Vec2", "Vec3", "Vec4", "UVec2", "UVec3", "UVec4", "IVec2",
-    "IVec3", "IVec4", "Mat3", "Mat4",
+    "f32", "u32", "i32", "usize", "bool", "Vec2", "Vec3", "Vec4", "UVec2", "UVec3", "UVec4",
+    "IVec2", "IVec3", "IVec4", "Mat3", "Mat4",
 ];
 
 /// Methods that act on an atomic in memory rather than on a loaded value.
 const ATOMIC_METHODS: &[&str] = &[
-    "fetch_add", "fetch_sub", "fetch_min", "fetch_max", "fetch_and", "fetch_or", "fetch_xor", "swap", "load",
+    "fetch_add",
+    "fetch_sub",
+    "fetch_min",
+    "fetch_max",
+    "fetch_and",
+    "fetch_or",
+    "fetch_xor",
+    "swap",
+    "load",
     "store",
 ];
 
@@ -64,7 +72,8 @@ pub fn err_at<T>(node: impl ToTokens, msg: impl std::fmt::Display) -> Result<T> 
 
 /// What to write instead of a loop label.
 const LABEL_HINT: &str = "use a `let mut` flag that the outer loop tests";
-const NO_LABELS: &str = "loop labels are not supported in kernels; use a `let mut` flag that the outer loop tests";
+const NO_LABELS: &str =
+    "loop labels are not supported in kernels; use a `let mut` flag that the outer loop tests";
 
 fn is_diverging(e: &Expr) -> bool {
     matches!(e, Expr::Break(_) | Expr::Continue(_) | Expr::Return(_))
@@ -183,10 +192,24 @@ impl Rewriter {
         let (ident, mutable, ty) = match &l.pat {
             Pat::Ident(p) => (p.ident.clone(), p.mutability.is_some(), None),
             Pat::Type(t) => match &*t.pat {
-                Pat::Ident(p) => (p.ident.clone(), p.mutability.is_some(), Some((*t.ty).clone())),
-                other => return err_at(other, "destructuring is not supported in kernels; bind one name per `let`"),
+                Pat::Ident(p) => (
+                    p.ident.clone(),
+                    p.mutability.is_some(),
+                    Some((*t.ty).clone()),
+                ),
+                other => {
+                    return err_at(
+                        other,
+                        "destructuring is not supported in kernels; bind one name per `let`",
+                    )
+                }
             },
-            other => return err_at(other, "destructuring is not supported in kernels; bind one name per `let`"),
+            other => {
+                return err_at(
+                    other,
+                    "destructuring is not supported in kernels; bind one name per `let`",
+                )
+            }
         };
         if let Pat::Ident(p) = &l.pat {
             if p.by_ref.is_some() {
@@ -210,11 +233,22 @@ impl Rewriter {
                 quote_spanned! {span=> let #ident #annot = ::cohort::ir::Var::new(#name, #v); }
             }
             (_, None) => match ty_tokens {
-                Some(t) => quote_spanned! {span=> let #ident = ::cohort::ir::Var::<#t>::uninit(#name); },
-                None => return err_at(l, "a `let` without initial value needs a type annotation in kernels"),
+                Some(t) => {
+                    quote_spanned! {span=> let #ident = ::cohort::ir::Var::<#t>::uninit(#name); }
+                }
+                None => {
+                    return err_at(
+                        l,
+                        "a `let` without initial value needs a type annotation in kernels",
+                    )
+                }
             },
         };
-        let bind = if mutable || l.init.is_none() { Bind::Var } else { Bind::Val };
+        let bind = if mutable || l.init.is_none() {
+            Bind::Var
+        } else {
+            Bind::Val
+        };
         self.bind(&name, bind);
         Ok(out)
     }
@@ -233,14 +267,19 @@ impl Rewriter {
                     return err_at(l, NO_LABELS);
                 }
                 if let Expr::Let(l) = &*w.cond {
-                    return err_at(l, "`while let` is not supported in kernels; use `while` with a condition");
+                    return err_at(
+                        l,
+                        "`while let` is not supported in kernels; use `while` with a condition",
+                    );
                 }
                 let c = self.rv(&w.cond)?;
                 self.loop_depth += 1;
                 let body = self.block(&w.body);
                 self.loop_depth -= 1;
                 let body = body?;
-                Ok(quote_spanned! {span=> ::cohort::ir::while_(|| #c, || { ::cohort::ir::discard(#body); }); })
+                Ok(
+                    quote_spanned! {span=> ::cohort::ir::while_(|| #c, || { ::cohort::ir::discard(#body); }); },
+                )
             }
             Expr::Loop(l) => {
                 if let Some(lb) = &l.label {
@@ -250,12 +289,20 @@ impl Rewriter {
                 let body = self.block(&l.body);
                 self.loop_depth -= 1;
                 let body = body?;
-                Ok(quote_spanned! {span=> ::cohort::ir::loop_(|| { ::cohort::ir::discard(#body); }); })
+                Ok(
+                    quote_spanned! {span=> ::cohort::ir::loop_(|| { ::cohort::ir::discard(#body); }); },
+                )
             }
             Expr::ForLoop(f) => self.for_loop(f),
             Expr::Break(b) => {
                 if b.label.is_some() {
-                    return err_at(b, format!("labelled `break` is not supported in kernels; {}", LABEL_HINT));
+                    return err_at(
+                        b,
+                        format!(
+                            "labelled `break` is not supported in kernels; {}",
+                            LABEL_HINT
+                        ),
+                    );
                 }
                 if let Some(v) = &b.expr {
                     return err_at(v, "`break` with a value is not supported in kernels; assign to a `let mut` before `break`");
@@ -267,7 +314,13 @@ impl Rewriter {
             }
             Expr::Continue(c) => {
                 if c.label.is_some() {
-                    return err_at(c, format!("labelled `continue` is not supported in kernels; {}", LABEL_HINT));
+                    return err_at(
+                        c,
+                        format!(
+                            "labelled `continue` is not supported in kernels; {}",
+                            LABEL_HINT
+                        ),
+                    );
                 }
                 Ok(quote_spanned! {span=> ::cohort::ir::continue_(); })
             }
@@ -297,7 +350,9 @@ impl Rewriter {
                 let v = self.rv(&b.right)?;
                 let opspan = b.op.span();
                 let combined = quote_spanned! {opspan=> ::cohort::ir::Place::get(__place) #op #v };
-                Ok(quote_spanned! {span=> { let __place = #p; ::cohort::ir::Place::set(__place, #combined); } })
+                Ok(
+                    quote_spanned! {span=> { let __place = #p; ::cohort::ir::Place::set(__place, #combined); } },
+                )
             }
             _ => {
                 let v = self.rv(e)?;
@@ -314,22 +369,43 @@ impl Rewriter {
         let var = match &*f.pat {
             Pat::Ident(p) if p.mutability.is_none() => p.ident.clone(),
             Pat::Wild(_) => format_ident!("_"),
-            other => return err_at(other, "`for` binds one immutable name in kernels, e.g. `for i in 0..n`"),
+            other => {
+                return err_at(
+                    other,
+                    "`for` binds one immutable name in kernels, e.g. `for i in 0..n`",
+                )
+            }
         };
         let (range, rev) = match &*f.expr {
             Expr::Range(r) => (r.clone(), false),
-            Expr::MethodCall(m) if m.method == "rev" && m.args.is_empty() => match strip_paren(&m.receiver) {
-                Expr::Range(r) => (r.clone(), true),
-                other => return err_at(other, "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
-            },
-            other => return err_at(other, "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`"),
+            Expr::MethodCall(m) if m.method == "rev" && m.args.is_empty() => {
+                match strip_paren(&m.receiver) {
+                    Expr::Range(r) => (r.clone(), true),
+                    other => return err_at(
+                        other,
+                        "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`",
+                    ),
+                }
+            }
+            other => {
+                return err_at(
+                    other,
+                    "`for` in kernels iterates over a range: `a..b`, `a..=b` or `(a..b).rev()`",
+                )
+            }
         };
         let (Some(start), Some(end)) = (&range.start, &range.end) else {
-            return err_at(&range, "ranges in kernel `for` loops need both ends: `a..b`");
+            return err_at(
+                &range,
+                "ranges in kernel `for` loops need both ends: `a..b`",
+            );
         };
         let inclusive = matches!(range.limits, syn::RangeLimits::Closed(_));
         if rev && inclusive {
-            return err_at(&range, "`(a..=b).rev()` is not supported in kernels; write `(a..b + 1).rev()`");
+            return err_at(
+                &range,
+                "`(a..=b).rev()` is not supported in kernels; write `(a..b + 1).rev()`",
+            );
         }
         let s = self.rv(start)?;
         let e = self.rv(end)?;
@@ -341,9 +417,13 @@ impl Rewriter {
         self.pop();
         let body = body?;
         if rev {
-            Ok(quote_spanned! {span=> ::cohort::ir::for_range_rev(#s, #e, |#var| { ::cohort::ir::discard(#body); }); })
+            Ok(
+                quote_spanned! {span=> ::cohort::ir::for_range_rev(#s, #e, |#var| { ::cohort::ir::discard(#body); }); },
+            )
         } else {
-            Ok(quote_spanned! {span=> ::cohort::ir::for_range(#s, #e, #inclusive, |#var| { ::cohort::ir::discard(#body); }); })
+            Ok(
+                quote_spanned! {span=> ::cohort::ir::for_range(#s, #e, #inclusive, |#var| { ::cohort::ir::discard(#body); }); },
+            )
         }
     }
 
@@ -522,7 +602,10 @@ impl Rewriter {
     fn if_expr(&mut self, i: &syn::ExprIf) -> Result<TokenStream> {
         let span = i.span();
         if let Expr::Let(l) = &*i.cond {
-            return err_at(l, "`if let` is not supported in kernels; use a boolean condition");
+            return err_at(
+                l,
+                "`if let` is not supported in kernels; use a boolean condition",
+            );
         }
         let c = self.rv(&i.cond)?;
         let then = self.block(&i.then_branch)?;
@@ -539,12 +622,19 @@ impl Rewriter {
             return err_at(t, "turbofish on methods is not supported in kernels");
         }
         let method = &m.method;
-        let args = m.args.iter().map(|a| self.rv(a)).collect::<Result<Vec<_>>>()?;
+        let args = m
+            .args
+            .iter()
+            .map(|a| self.rv(a))
+            .collect::<Result<Vec<_>>>()?;
         let name = method.to_string();
         if name == "clone" && args.is_empty() {
             return self.rv(&m.receiver);
         }
-        let recv = if ATOMIC_METHODS.contains(&name.as_str()) && self.is_place(&m.receiver) && !self.is_bare_var(&m.receiver) {
+        let recv = if ATOMIC_METHODS.contains(&name.as_str())
+            && self.is_place(&m.receiver)
+            && !self.is_bare_var(&m.receiver)
+        {
             self.place(&m.receiver)?
         } else if let Some((id, Bind::Root)) = self.local_ident(&m.receiver) {
             quote_spanned! {span=> ::cohort::ir::AutoDeref::auto_deref(#id) }
@@ -561,12 +651,20 @@ impl Rewriter {
     fn call(&mut self, c: &syn::ExprCall) -> Result<TokenStream> {
         let span = c.span();
         let Expr::Path(fp) = &*c.func else {
-            return err_at(&c.func, "only calls of named functions are supported in kernels");
+            return err_at(
+                &c.func,
+                "only calls of named functions are supported in kernels",
+            );
         };
         if self.local_ident(&c.func).is_some() {
             return err_at(&c.func, "calling a local value is not supported in kernels");
         }
-        let is_group_share = fp.qself.is_none() && fp.path.segments.last().is_some_and(|s| s.ident == "group_share");
+        let is_group_share = fp.qself.is_none()
+            && fp
+                .path
+                .segments
+                .last()
+                .is_some_and(|s| s.ident == "group_share");
         if is_group_share && !self.allow_group_share {
             return err_at(
                 &c.func,
@@ -645,7 +743,10 @@ impl Rewriter {
         let mut p = fp.path.clone();
         let l = p.segments.last_mut().unwrap();
         let generics = std::mem::replace(&mut l.arguments, syn::PathArguments::None);
-        p.segments.push(syn::PathSegment { ident: format_ident!("ir", span = span), arguments: generics });
+        p.segments.push(syn::PathSegment {
+            ident: format_ident!("ir", span = span),
+            arguments: generics,
+        });
         Ok(p.to_token_stream())
     }
 
@@ -653,7 +754,10 @@ impl Rewriter {
         let span = s.span();
         if let Some(r) = &s.rest {
             let dots = &s.dot2_token;
-            return err_at(quote!(#dots #r), "struct update syntax (`..base`) is not supported in kernels; list every field");
+            return err_at(
+                quote!(#dots #r),
+                "struct update syntax (`..base`) is not supported in kernels; list every field",
+            );
         }
         if s.qself.is_some() {
             return err_at(s, "qualified struct paths are not supported in kernels");
@@ -665,7 +769,9 @@ impl Rewriter {
             let member = &f.member;
             let v = self.rv(&f.expr)?;
             let fspan = f.span();
-            inits.push(quote_spanned! {fspan=> ::cohort::ir::field_init(|__s: &#path| &__s.#member, #v) });
+            inits.push(
+                quote_spanned! {fspan=> ::cohort::ir::field_init(|__s: &#path| &__s.#member, #v) },
+            );
             check.push(quote_spanned! {fspan=> #member: ::core::unreachable!() });
         }
         Ok(quote_spanned! {span=> {
@@ -703,8 +809,13 @@ fn compound_op(op: &BinOp) -> Option<TokenStream> {
 /// Expressions that are statements even without a `;` (their value is `()`).
 fn is_statement_like(e: &Expr) -> bool {
     match e {
-        Expr::While(_) | Expr::Loop(_) | Expr::ForLoop(_) | Expr::Assign(_) | Expr::Break(_)
-        | Expr::Continue(_) | Expr::Return(_) => true,
+        Expr::While(_)
+        | Expr::Loop(_)
+        | Expr::ForLoop(_)
+        | Expr::Assign(_)
+        | Expr::Break(_)
+        | Expr::Continue(_)
+        | Expr::Return(_) => true,
         Expr::Binary(b) => compound_op(&b.op).is_some(),
         _ => false,
     }

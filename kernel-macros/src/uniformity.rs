@@ -18,8 +18,22 @@ use quote::ToTokens;
 use std::collections::{HashMap, HashSet};
 use syn::{Block, Expr, Pat, Stmt};
 
-const UNIFORM_BUILTINS: &[&str] = &["workgroup_id", "num_workgroups", "workgroup_index", "workgroup_size", "subgroup_size", "num_subgroups"];
-const SYNC_CALLS: &[&str] = &["workgroup_barrier", "storage_barrier", "subgroup_barrier", "group_share", "group_any", "workgroup_uniform_load"];
+const UNIFORM_BUILTINS: &[&str] = &[
+    "workgroup_id",
+    "num_workgroups",
+    "workgroup_index",
+    "workgroup_size",
+    "subgroup_size",
+    "num_subgroups",
+];
+const SYNC_CALLS: &[&str] = &[
+    "workgroup_barrier",
+    "storage_barrier",
+    "subgroup_barrier",
+    "group_share",
+    "group_any",
+    "workgroup_uniform_load",
+];
 
 const STARTS_HERE: &str = "the non-uniform control flow starts here";
 const AND_NOTE: &str = "the non-uniform control flow starts here: the right side of `&&` runs only for the invocations where this is true";
@@ -55,7 +69,9 @@ pub struct Calls {
 /// The helper (or intrinsic) a call goes to, when it is a free function with a module of
 /// its own (`f(..)`, `path::f(..)`): not `Type::f`, `Self::f`, `T::f` or `<T as Tr>::f`.
 fn helper_path(c: &syn::ExprCall, generics: &HashSet<String>) -> Option<syn::Path> {
-    let Expr::Path(fp) = &*c.func else { return None };
+    let Expr::Path(fp) = &*c.func else {
+        return None;
+    };
     if fp.qself.is_some() {
         return None;
     }
@@ -63,7 +79,8 @@ fn helper_path(c: &syn::ExprCall, generics: &HashSet<String>) -> Option<syn::Pat
     if segs.len() >= 2 {
         let ty = segs[segs.len() - 2].ident.to_string();
         let first = segs[0].ident.to_string();
-        let lower = ty.chars().next().is_some_and(|ch| ch.is_lowercase()) && !crate::rewrite::is_builtin_type(&ty);
+        let lower = ty.chars().next().is_some_and(|ch| ch.is_lowercase())
+            && !crate::rewrite::is_builtin_type(&ty);
         if !lower || first == "Self" || generics.contains(&first) {
             return None;
         }
@@ -134,7 +151,11 @@ impl Walker<'_> {
 
     fn fail(&mut self, at: TokenStream, what: &str, why: syn::Error) {
         if self.check && self.error.is_none() {
-            let scope = if what.starts_with("subgroup_") { "subgroup" } else { "workgroup" };
+            let scope = if what.starts_with("subgroup_") {
+                "subgroup"
+            } else {
+                "workgroup"
+            };
             let mut e = syn::Error::new_spanned(
                 at,
                 format!(
@@ -172,7 +193,11 @@ impl Walker<'_> {
             Stmt::Local(l) => {
                 let u = l.init.as_ref().map(|i| self.expr(&i.expr)).unwrap_or(true);
                 if let Some((name, mutable)) = pat_name(&l.pat) {
-                    let u = if mutable || l.init.is_none() { u && !self.nonuniform_vars.contains(&name) } else { u };
+                    let u = if mutable || l.init.is_none() {
+                        u && !self.nonuniform_vars.contains(&name)
+                    } else {
+                        u
+                    };
                     self.scopes.last_mut().unwrap().insert(name, u);
                 }
             }
@@ -185,15 +210,30 @@ impl Walker<'_> {
 
     /// Runs `f` for code governed by `cond` (where it holds, or where it does not), which
     /// is non-uniform unless `cond_uniform`; `note` says so at the condition.
-    fn guarded<R>(&mut self, cond: &impl ToTokens, holds: bool, cond_uniform: bool, note: &str, f: impl FnOnce(&mut Self) -> R) -> R {
-        let c = (!cond_uniform).then(|| Cond { tokens: cond.to_token_stream(), holds });
+    fn guarded<R>(
+        &mut self,
+        cond: &impl ToTokens,
+        holds: bool,
+        cond_uniform: bool,
+        note: &str,
+        f: impl FnOnce(&mut Self) -> R,
+    ) -> R {
+        let c = (!cond_uniform).then(|| Cond {
+            tokens: cond.to_token_stream(),
+            holds,
+        });
         let why = c.as_ref().map(|c| syn::Error::new_spanned(&c.tokens, note));
         self.diverging(why, c, f)
     }
 
     /// Runs `f` with control non-uniform for the reason `why` (if any and not already),
     /// and `cond` as the innermost condition.
-    fn diverging<R>(&mut self, why: Option<syn::Error>, cond: Option<Cond>, f: impl FnOnce(&mut Self) -> R) -> R {
+    fn diverging<R>(
+        &mut self,
+        why: Option<syn::Error>,
+        cond: Option<Cond>,
+        f: impl FnOnce(&mut Self) -> R,
+    ) -> R {
         let saved = self.divergent.clone();
         let saved_cond = std::mem::replace(&mut self.cond, cond);
         if self.divergent.is_none() {
@@ -205,12 +245,21 @@ impl Walker<'_> {
         r
     }
 
-    fn loop_body(&mut self, cond_uniform: bool, why: impl FnOnce() -> (syn::Error, Option<Cond>), body: &Block) {
+    fn loop_body(
+        &mut self,
+        cond_uniform: bool,
+        why: impl FnOnce() -> (syn::Error, Option<Cond>),
+        body: &Block,
+    ) {
         // A non-uniform `break`/`continue` inside makes later iterations non-uniform, so
         // probe the body first and re-walk it as divergent if one exists. Such an exit is
         // also the reason to report when the condition is non-uniform too: typically the
         // condition reads a variable that the exit made non-uniform.
-        let exit = if self.divergent.is_none() { self.divergent_exit(body) } else { None };
+        let exit = if self.divergent.is_none() {
+            self.divergent_exit(body)
+        } else {
+            None
+        };
         let (why, cond) = match exit {
             Some(notes) => (Some(notes), None),
             None if cond_uniform => (None, None),
@@ -259,7 +308,10 @@ impl Walker<'_> {
         match &self.cond {
             Some(c) => notes.combine(syn::Error::new_spanned(
                 &c.tokens,
-                format!("invocations for which this {} {what}", if c.holds { "holds" } else { "does not hold" }),
+                format!(
+                    "invocations for which this {} {what}",
+                    if c.holds { "holds" } else { "does not hold" }
+                ),
             )),
             None => notes.combine(d.clone()),
         }
@@ -298,7 +350,9 @@ impl Walker<'_> {
                 let b = self.expr(&i.expr);
                 let ix = self.expr(&i.index);
                 let root = root_name(&i.expr);
-                let from_uniform = root.as_ref().is_some_and(|r| self.params.uniform_buffers.contains(r));
+                let from_uniform = root
+                    .as_ref()
+                    .is_some_and(|r| self.params.uniform_buffers.contains(r));
                 let from_local = root.as_ref().is_some_and(|r| self.lookup(r).is_some());
                 (from_uniform || from_local) && b && ix
             }
@@ -318,8 +372,12 @@ impl Walker<'_> {
                 let r = match b.op {
                     // The right side runs only where the left side is true (`&&`) or
                     // false (`||`): under non-uniform control when the left side is.
-                    syn::BinOp::And(_) => self.guarded(&b.left, true, l, AND_NOTE, |w| w.expr(&b.right)),
-                    syn::BinOp::Or(_) => self.guarded(&b.left, false, l, OR_NOTE, |w| w.expr(&b.right)),
+                    syn::BinOp::And(_) => {
+                        self.guarded(&b.left, true, l, AND_NOTE, |w| w.expr(&b.right))
+                    }
+                    syn::BinOp::Or(_) => {
+                        self.guarded(&b.left, false, l, OR_NOTE, |w| w.expr(&b.right))
+                    }
                     _ => self.expr(&b.right),
                 };
                 if let Some(target) = assigned_var(&b.left) {
@@ -339,11 +397,26 @@ impl Walker<'_> {
             }
             Expr::Array(a) => a.elems.iter().fold(true, |acc, x| self.expr(x) && acc),
             Expr::Repeat(r) => self.expr(&r.expr),
-            Expr::Struct(s) => s.fields.iter().fold(true, |acc, f| self.expr(&f.expr) && acc),
+            Expr::Struct(s) => s
+                .fields
+                .iter()
+                .fold(true, |acc, f| self.expr(&f.expr) && acc),
             Expr::MethodCall(m) => {
                 let r = self.expr(&m.receiver);
                 let args = m.args.iter().fold(true, |acc, a| self.expr(a) && acc);
-                let atomic = matches!(m.method.to_string().as_str(), "fetch_add" | "fetch_sub" | "fetch_min" | "fetch_max" | "fetch_and" | "fetch_or" | "fetch_xor" | "swap" | "load" | "store");
+                let atomic = matches!(
+                    m.method.to_string().as_str(),
+                    "fetch_add"
+                        | "fetch_sub"
+                        | "fetch_min"
+                        | "fetch_max"
+                        | "fetch_and"
+                        | "fetch_or"
+                        | "fetch_xor"
+                        | "swap"
+                        | "load"
+                        | "store"
+                );
                 r && args && !atomic
             }
             Expr::Call(c) => {
@@ -384,7 +457,9 @@ impl Walker<'_> {
                         all &= self.expr(a);
                     }
                 }
-                let nonuniform_fn = name.starts_with("subgroup_") || name.starts_with("atomic_") || name == "group_share";
+                let nonuniform_fn = name.starts_with("subgroup_")
+                    || name.starts_with("atomic_")
+                    || name == "group_share";
                 // A helper given a buffer may read memory or use atomics.
                 let memory = c.args.iter().any(|a| self.is_memory(a));
                 // workgroup_uniform_load gives every invocation the same value by definition.
@@ -409,7 +484,10 @@ impl Walker<'_> {
             Expr::While(w) => {
                 let c = self.expr(&w.cond);
                 let why = || {
-                    let cond = Cond { tokens: w.cond.to_token_stream(), holds: true };
+                    let cond = Cond {
+                        tokens: w.cond.to_token_stream(),
+                        holds: true,
+                    };
                     (syn::Error::new_spanned(&w.cond, STARTS_HERE), Some(cond))
                 };
                 self.loop_body(c, why, &w.body);
@@ -458,7 +536,11 @@ impl Walker<'_> {
     }
 
     fn is_nonuniform_root(&self, p: &syn::ExprPath) -> bool {
-        p.path.segments.len() == 1 && self.params.nonuniform.contains(&p.path.segments[0].ident.to_string())
+        p.path.segments.len() == 1
+            && self
+                .params
+                .nonuniform
+                .contains(&p.path.segments[0].ident.to_string())
     }
 
     /// Whether a call argument is (a reference into) a storage buffer or workgroup memory.
@@ -501,8 +583,16 @@ fn is_compound(op: &syn::BinOp) -> bool {
     use syn::BinOp::*;
     matches!(
         op,
-        AddAssign(_) | SubAssign(_) | MulAssign(_) | DivAssign(_) | RemAssign(_) | BitAndAssign(_) | BitOrAssign(_)
-            | BitXorAssign(_) | ShlAssign(_) | ShrAssign(_)
+        AddAssign(_)
+            | SubAssign(_)
+            | MulAssign(_)
+            | DivAssign(_)
+            | RemAssign(_)
+            | BitAndAssign(_)
+            | BitOrAssign(_)
+            | BitXorAssign(_)
+            | ShlAssign(_)
+            | ShrAssign(_)
     )
 }
 
@@ -582,7 +672,10 @@ pub fn check(body: &Block, params: &Params) -> syn::Result<Calls> {
 /// The compile-time checks of a body's helper calls: a helper called under non-uniform
 /// control must not need uniform control (error at the call), and the body's own
 /// `NEEDS_UNIFORM` (for a helper: whether any helper or intrinsic it calls does).
-pub fn call_checks(calls: &Calls, own_name: Option<&syn::Ident>) -> (Vec<TokenStream>, TokenStream) {
+pub fn call_checks(
+    calls: &Calls,
+    own_name: Option<&syn::Ident>,
+) -> (Vec<TokenStream>, TokenStream) {
     use quote::quote_spanned;
     use syn::spanned::Spanned;
     let asserts = calls
@@ -597,8 +690,14 @@ pub fn call_checks(calls: &Calls, own_name: Option<&syn::Ident>) -> (Vec<TokenSt
         })
         .collect();
     // A helper's call of itself is refused elsewhere; here it would be a constant cycle.
-    let is_self = |p: &&syn::Path| p.segments.len() == 1 && own_name.is_some_and(|n| p.segments[0].ident == *n);
-    let callees = calls.all.iter().filter(|p| !is_self(p)).map(|p| quote::quote!(#p::NEEDS_UNIFORM));
+    let is_self = |p: &&syn::Path| {
+        p.segments.len() == 1 && own_name.is_some_and(|n| p.segments[0].ident == *n)
+    };
+    let callees = calls
+        .all
+        .iter()
+        .filter(|p| !is_self(p))
+        .map(|p| quote::quote!(#p::NEEDS_UNIFORM));
     let needs = quote::quote!(false #(|| #callees)*);
     (asserts, needs)
 }
@@ -606,7 +705,11 @@ pub fn call_checks(calls: &Calls, own_name: Option<&syn::Ident>) -> (Vec<TokenSt
 /// Checks that a `group_share` closure reads only its group index, uniform parameters
 /// and constants: for `group = Grid` the host runs it before the dispatch, where no
 /// other kernel value exists.
-pub fn check_grid_closures(body: &Block, params: &Params, all_params: &HashSet<String>) -> syn::Result<()> {
+pub fn check_grid_closures(
+    body: &Block,
+    params: &Params,
+    all_params: &HashSet<String>,
+) -> syn::Result<()> {
     use syn::visit::Visit;
     struct V<'a> {
         params: &'a Params,
@@ -672,7 +775,13 @@ pub fn check_grid_closures(body: &Block, params: &Params, all_params: &HashSet<S
             self.locals.pop();
         }
     }
-    let mut v = V { params, all: all_params, locals: vec![HashSet::new()], in_closure: None, err: None };
+    let mut v = V {
+        params,
+        all: all_params,
+        locals: vec![HashSet::new()],
+        in_closure: None,
+        err: None,
+    };
     v.visit_block(body);
     match v.err {
         Some(e) => Err(e),

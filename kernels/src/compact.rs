@@ -257,7 +257,16 @@ pub fn compact_scatter(
 /// before it when its flag is 1, else after the `alive` ones and the zeros before it.
 #[kernel_fn]
 #[allow(clippy::too_many_arguments)]
-pub fn move_ray(e: u32, g: u32, offset: u32, alive: u32, words: &mut [u32; 256], before: &mut [u32; 256], idrays: &[u32], out: &mut [u32]) {
+pub fn move_ray(
+    e: u32,
+    g: u32,
+    offset: u32,
+    alive: u32,
+    words: &mut [u32; 256],
+    before: &mut [u32; 256],
+    idrays: &[u32],
+    out: &mut [u32],
+) {
     let id = idrays[g as usize];
     let w = words[(e / 32) as usize];
     let bit = e % 32;
@@ -292,8 +301,14 @@ pub fn specs(device: &cohort::runtime::Device) -> Specs {
 }
 
 /// The three kernels' compiled artifacts (to prepare their pipelines ahead of use).
-pub fn artifacts(specs: &Specs) -> Result<Vec<std::sync::Arc<cohort::runtime::KernelArtifact>>, cohort::emit::CompileError> {
-    Ok(vec![compact_count::artifact(&specs.count)?, compact_offsets::artifact(&specs.offsets)?, compact_scatter::artifact(&specs.scatter)?])
+pub fn artifacts(
+    specs: &Specs,
+) -> Result<Vec<std::sync::Arc<cohort::runtime::KernelArtifact>>, cohort::emit::CompileError> {
+    Ok(vec![
+        compact_count::artifact(&specs.count)?,
+        compact_offsets::artifact(&specs.offsets)?,
+        compact_scatter::artifact(&specs.scatter)?,
+    ])
 }
 
 /// Records the compaction of up to `n` rays (`count[0] <= n` are compacted) into
@@ -314,7 +329,23 @@ pub fn record(
 ) -> cohort::Result<()> {
     let threads = n.div_ceil(BLOCK) * WG;
     compact_count::record(batch, &specs.count, threads, count, flags, scratch)?;
-    compact_offsets::record(batch, &specs.offsets, cohort::Grid::Groups([1, 1, 1]), count, scratch, total)?;
-    compact_scatter::record(batch, &specs.scatter, threads, count, scratch, total, idrays, out)?;
+    compact_offsets::record(
+        batch,
+        &specs.offsets,
+        cohort::Grid::Groups([1, 1, 1]),
+        count,
+        scratch,
+        total,
+    )?;
+    compact_scatter::record(
+        batch,
+        &specs.scatter,
+        threads,
+        count,
+        scratch,
+        total,
+        idrays,
+        out,
+    )?;
     Ok(())
 }

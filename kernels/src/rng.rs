@@ -18,7 +18,11 @@ pub fn hash(mut x: u32) -> u32 {
 /// The random stream key of one path vertex.
 #[kernel_fn]
 pub fn stream(seed: u32, pixel: u32, path: u32, bounce: u32) -> u32 {
-    hash(seed ^ hash(pixel ^ hash(path.wrapping_mul(0x9e3779b9) ^ hash(bounce.wrapping_add(0x632be5ab)))))
+    hash(
+        seed ^ hash(
+            pixel ^ hash(path.wrapping_mul(0x9e3779b9) ^ hash(bounce.wrapping_add(0x632be5ab))),
+        ),
+    )
 }
 
 /// Uniform number in [0, 1) for dimension `dim` of a stream.

@@ -25,10 +25,20 @@ impl Rng {
 
 /// Host reference: flag-1 ids first, then flag-0 ids, both in order.
 fn partition(flags: &[u32], ids: &[u32]) -> (Vec<u32>, u32) {
-    let ones: Vec<u32> = ids.iter().zip(flags).filter(|(_, &f)| f != 0).map(|(&i, _)| i).collect();
+    let ones: Vec<u32> = ids
+        .iter()
+        .zip(flags)
+        .filter(|(_, &f)| f != 0)
+        .map(|(&i, _)| i)
+        .collect();
     let total = ones.len() as u32;
     let mut out = ones;
-    out.extend(ids.iter().zip(flags).filter(|(_, &f)| f == 0).map(|(&i, _)| i));
+    out.extend(
+        ids.iter()
+            .zip(flags)
+            .filter(|(_, &f)| f == 0)
+            .map(|(&i, _)| i),
+    );
     (out, total)
 }
 
@@ -44,7 +54,10 @@ fn run(d: &Device, flags: &[u32], ids: &[u32], n: u32, launched: u32) -> (Vec<u3
     let out = d.upload(&vec![SENTINEL; len + SLACK]).unwrap();
     let sp = specs(d);
     let mut b = d.batch();
-    record(&mut b, &sp, launched, &count, &flags_buf, &scratch, &total, &ids_buf, &out).unwrap();
+    record(
+        &mut b, &sp, launched, &count, &flags_buf, &scratch, &total, &ids_buf, &out,
+    )
+    .unwrap();
     let stats = b.submit().unwrap();
     assert_eq!(stats.len(), DISPATCHES);
     let got = d.read(&out).unwrap();
@@ -58,8 +71,14 @@ fn run(d: &Device, flags: &[u32], ids: &[u32], n: u32, launched: u32) -> (Vec<u3
 }
 
 fn check(kind: BackendKind) {
-    let Some(d) = Device::for_tests(kind) else { return };
-    println!("{}: subgroup size {}", d.info().adapter_name, d.info().subgroup_size);
+    let Some(d) = Device::for_tests(kind) else {
+        return;
+    };
+    println!(
+        "{}: subgroup size {}",
+        d.info().adapter_name,
+        d.info().subgroup_size
+    );
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let mut cases = Vec::new();
     for &n in SIZES {
@@ -74,12 +93,19 @@ fn check(kind: BackendKind) {
     cases.push((BLOCK * 2, BLOCK * 2 + 1, 700));
     for (n, launched, density) in cases {
         let len = launched as usize;
-        let flags: Vec<u32> = (0..len).map(|_| ((rng.next() % 1000) < density) as u32).collect();
+        let flags: Vec<u32> = (0..len)
+            .map(|_| ((rng.next() % 1000) < density) as u32)
+            .collect();
         // Distinct ids that are not the identity, so misplaced ids are caught.
-        let ids: Vec<u32> = (0..len as u32).map(|i| i.wrapping_mul(2_654_435_761) ^ 0x5555).collect();
+        let ids: Vec<u32> = (0..len as u32)
+            .map(|i| i.wrapping_mul(2_654_435_761) ^ 0x5555)
+            .collect();
         let (want, want_total) = partition(&flags[..n as usize], &ids[..n as usize]);
         let (got, total) = run(&d, &flags, &ids, n, launched);
-        assert_eq!(total, want_total, "{kind:?}: n = {n}, density {density}/1000: wrong total");
+        assert_eq!(
+            total, want_total,
+            "{kind:?}: n = {n}, density {density}/1000: wrong total"
+        );
         if got != want {
             let first = got.iter().zip(&want).position(|(a, b)| a != b).unwrap();
             panic!(

@@ -7,7 +7,9 @@
 //!   without bias.
 
 use cohort_kernels::rng::{stream, uniform};
-use cohort_kernels::sampling::{cosine_patch, CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler};
+use cohort_kernels::sampling::{
+    cosine_patch, CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
+};
 use glam::{Vec2, Vec3};
 use std::f64::consts::PI;
 
@@ -40,7 +42,10 @@ fn assert_chi2(observed: &[f64], expected: &[f64], what: &str) {
     }
     let dof = (dof - 1) as f64;
     let limit = dof + 6.0 * (2.0 * dof).sqrt();
-    assert!(chi2 < limit, "{what}: chi2 = {chi2:.1} over {dof} degrees of freedom (limit {limit:.1})");
+    assert!(
+        chi2 < limit,
+        "{what}: chi2 = {chi2:.1} over {dof} degrees of freedom (limit {limit:.1})"
+    );
 }
 
 #[test]
@@ -55,7 +60,9 @@ fn patch_probabilities_sum_to_one_and_are_followed() {
     for k in 0..samples {
         counts[cosine_patch(stream(7, k, 0, 0), N) as usize] += 1.0;
     }
-    let expected: Vec<f64> = (0..N * m).map(|p| p_patch(p / m, N) * samples as f64).collect();
+    let expected: Vec<f64> = (0..N * m)
+        .map(|p| p_patch(p / m, N) * samples as f64)
+        .collect();
     assert_chi2(&counts, &expected, "patch choice");
 }
 
@@ -83,7 +90,9 @@ fn sample(strategy: &str, k: u32, group: u32) -> (Vec3, f32) {
         "cosine" => Cosine::sample(n, u, Cosine::group_value(g, N), N),
         "coherent_uniform" => CoherentUniform::sample(n, u, CoherentUniform::group_value(g, N), N),
         "coherent_cosine" => CoherentCosine::sample(n, u, CoherentCosine::group_value(g, N), N),
-        "coherent_equal_area" => CoherentEqualArea::sample(n, u, CoherentEqualArea::group_value(g, N), N),
+        "coherent_equal_area" => {
+            CoherentEqualArea::sample(n, u, CoherentEqualArea::group_value(g, N), N)
+        }
         _ => unreachable!(),
     };
     (s.truncate(), s.w)
@@ -91,7 +100,12 @@ fn sample(strategy: &str, k: u32, group: u32) -> (Vec3, f32) {
 
 #[test]
 fn stated_pdfs_integrate_to_one() {
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
+    for strategy in [
+        "cosine",
+        "coherent_uniform",
+        "coherent_cosine",
+        "coherent_equal_area",
+    ] {
         // Midpoint rule over (cos theta, phi); the pdfs are constant in phi.
         let steps = 20_000;
         let mut total = 0.0;
@@ -100,7 +114,10 @@ fn stated_pdfs_integrate_to_one() {
             let s = (1.0 - c * c).sqrt();
             total += pdf(strategy, Vec3::new(s as f32, 0.0, c as f32)) * 2.0 * PI / steps as f64;
         }
-        assert!((total - 1.0).abs() < 1e-3, "{strategy}: pdf integrates to {total}");
+        assert!(
+            (total - 1.0).abs() < 1e-3,
+            "{strategy}: pdf integrates to {total}"
+        );
     }
 }
 
@@ -109,13 +126,21 @@ fn directions_follow_their_pdf() {
     // Grid: 2 theta cells per patch band, 2 phi cells per patch column.
     let (nt, np) = (2 * N, 2 * 4 * N);
     let samples = 300_000u32;
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
+    for strategy in [
+        "cosine",
+        "coherent_uniform",
+        "coherent_cosine",
+        "coherent_equal_area",
+    ] {
         let mut counts = vec![0.0; (nt * np) as usize];
         for k in 0..samples {
             // One sample per group: chi-square needs independent samples (members of a
             // group are correlated by design; their marginal is the same).
             let (d, _) = sample(strategy, k, 1);
-            assert!(d.z >= -1e-6 && (d.length() - 1.0).abs() < 1e-4, "{strategy}: bad direction {d}");
+            assert!(
+                d.z >= -1e-6 && (d.length() - 1.0).abs() < 1e-4,
+                "{strategy}: bad direction {d}"
+            );
             let theta = (d.z.clamp(0.0, 1.0) as f64).acos();
             let phi = (d.y as f64).atan2(d.x as f64).rem_euclid(2.0 * PI);
             let ti = ((theta / (PI / 2.0) * nt as f64) as u32).min(nt - 1);
@@ -125,13 +150,17 @@ fn directions_follow_their_pdf() {
         // Expected mass of each cell: integrate the pdf over it (midpoint in cos theta).
         let mut expected = vec![0.0; (nt * np) as usize];
         for ti in 0..nt {
-            let (t0, t1) = (ti as f64 * PI / 2.0 / nt as f64, (ti + 1) as f64 * PI / 2.0 / nt as f64);
+            let (t0, t1) = (
+                ti as f64 * PI / 2.0 / nt as f64,
+                (ti + 1) as f64 * PI / 2.0 / nt as f64,
+            );
             let sub = 200;
             let mut mass = 0.0;
             for k in 0..sub {
                 let c = t1.cos() + (t0.cos() - t1.cos()) * (k as f64 + 0.5) / sub as f64;
                 let s = (1.0 - c * c).sqrt();
-                mass += pdf(strategy, Vec3::new(s as f32, 0.0, c as f32)) * (t0.cos() - t1.cos()) / sub as f64;
+                mass += pdf(strategy, Vec3::new(s as f32, 0.0, c as f32)) * (t0.cos() - t1.cos())
+                    / sub as f64;
             }
             for p in 0..np {
                 expected[(ti * np + p) as usize] = mass * 2.0 * PI / np as f64 * samples as f64;
@@ -148,7 +177,12 @@ fn weighted_estimates_are_unbiased() {
     // Exact: integral (1 + x/2 + 2 z^2) cos/pi = 1 + 0 + 2 * E[z^2] = 1 + 2 * 1/2 = 2.
     let exact = 2.0;
     let samples = 400_000u32;
-    for strategy in ["cosine", "coherent_uniform", "coherent_cosine", "coherent_equal_area"] {
+    for strategy in [
+        "cosine",
+        "coherent_uniform",
+        "coherent_cosine",
+        "coherent_equal_area",
+    ] {
         let mut sum = 0.0;
         let mut sq = 0.0;
         for k in 0..samples {
@@ -161,7 +195,10 @@ fn weighted_estimates_are_unbiased() {
         let var = sq / samples as f64 - mean * mean;
         // Groups of 32 share a patch: the effective sample count is that of groups.
         let se = (var / (samples / 32) as f64).sqrt();
-        assert!((mean - exact).abs() < 5.0 * se + 1e-3, "{strategy}: mean {mean} vs {exact} (se {se})");
+        assert!(
+            (mean - exact).abs() < 5.0 * se + 1e-3,
+            "{strategy}: mean {mean} vs {exact} (se {se})"
+        );
     }
 }
 
@@ -174,8 +211,16 @@ fn equal_area_cells_give_hemisphere_directions() {
     for cell in [0, 3, k + 1, k * k / 2, k * k - 1] {
         for s in 0..200 {
             let key = stream(5, s, 0, 0);
-            let d = CoherentEqualArea::sample(Vec3::Z, Vec2::new(uniform(key, 0), uniform(key, 1)), cell, N);
-            assert!(d.z >= 0.0 && (d.truncate().length() - 1.0).abs() < 1e-4 && d.w == 1.0, "cell {cell}: {d}");
+            let d = CoherentEqualArea::sample(
+                Vec3::Z,
+                Vec2::new(uniform(key, 0), uniform(key, 1)),
+                cell,
+                N,
+            );
+            assert!(
+                d.z >= 0.0 && (d.truncate().length() - 1.0).abs() < 1e-4 && d.w == 1.0,
+                "cell {cell}: {d}"
+            );
         }
     }
     // Cells are drawn uniformly.

@@ -34,10 +34,12 @@ fn capabilities(uses_subgroups: bool) -> Capabilities {
 }
 
 fn validate(module: &naga::Module, caps: Capabilities) -> Result<naga::valid::ModuleInfo, String> {
-    Validator::new(ValidationFlags::all(), caps).validate(module).map_err(|e| {
-        let inner = e.as_inner();
-        format!("naga validation failed: {inner}\n{inner:?}")
-    })
+    Validator::new(ValidationFlags::all(), caps)
+        .validate(module)
+        .map_err(|e| {
+            let inner = e.as_inner();
+            format!("naga validation failed: {inner}\n{inner:?}")
+        })
 }
 
 /// Output of the back end for one specialisation.
@@ -67,8 +69,9 @@ pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
     validate(&module, caps).map_err(|m| err("validate", m))?;
     naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
     let info = validate(&module, caps).map_err(|m| err("validate after compact", m))?;
-    let wgsl = naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
-        .map_err(|e| err("write WGSL", e.to_string()))?;
+    let wgsl =
+        naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
+            .map_err(|e| err("write WGSL", e.to_string()))?;
     // The WGSL namer may rename the entry point (a name ending in a digit gets a `_`);
     // use its name for both languages so one `entry_point` serves both backends.
     let entry = wgsl_entry_point(&wgsl).unwrap_or_else(|| built.info.name.to_string());
@@ -83,7 +86,8 @@ pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
         // extension, which the runtime enables), as WGSL promises, instead of naga's
         // polyfill: a store of every array by invocation 0 plus a barrier in every
         // kernel, which made a 16 KiB workgroup array cost seconds on lavapipe.
-        zero_initialize_workgroup_memory: naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Native,
+        zero_initialize_workgroup_memory:
+            naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Native,
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
@@ -92,14 +96,22 @@ pub fn emit(built: &BuiltKernel) -> Result<Emitted, CompileError> {
     };
     let spirv = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
         .map_err(|e| err("write SPIR-V", e.to_string()))?;
-    Ok(Emitted { module, wgsl, spirv, entry_point: entry })
+    Ok(Emitted {
+        module,
+        wgsl,
+        spirv,
+        entry_point: entry,
+    })
 }
 
 fn wgsl_entry_point(wgsl: &str) -> Option<String> {
     let at = wgsl.find("@compute")?;
     let rest = &wgsl[at..];
     let f = rest.find("fn ")? + 3;
-    let name: String = rest[f..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+    let name: String = rest[f..]
+        .chars()
+        .take_while(|c| c.is_alphanumeric() || *c == '_')
+        .collect();
     (!name.is_empty()).then_some(name)
 }
 

@@ -11,7 +11,9 @@ use glam::UVec4;
 use std::sync::atomic::{AtomicI32, AtomicU32, Ordering};
 
 use crate::ir::{builder::with, GpuType, Place, Val};
-use naga::{Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement, SubgroupOperation as So};
+use naga::{
+    Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement, SubgroupOperation as So,
+};
 
 pub fn workgroup_barrier() {}
 pub mod workgroup_barrier {
@@ -61,7 +63,10 @@ pub mod workgroup_uniform_load {
         super::with(|c| {
             let ty = T::naga_type(&mut c.module);
             let result = c.expr(super::Expression::WorkGroupUniformLoadResult { ty });
-            c.stmt(super::Statement::WorkGroupUniformLoad { pointer: p.ptr, result });
+            c.stmt(super::Statement::WorkGroupUniformLoad {
+                pointer: p.ptr,
+                result,
+            });
             super::Val::from_handle(result)
         })
     }
@@ -75,7 +80,9 @@ pub mod group_share {
     /// Whether a call must be reached by every invocation of its group (checked at the
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
     pub const NEEDS_UNIFORM: bool = true;
-    pub fn ir<T: super::GpuType>(leader: impl FnOnce(super::Val<u32>) -> super::Val<T>) -> super::Val<T> {
+    pub fn ir<T: super::GpuType>(
+        leader: impl FnOnce(super::Val<u32>) -> super::Val<T>,
+    ) -> super::Val<T> {
         crate::ir::group::group_share(leader)
     }
 }
@@ -103,7 +110,12 @@ fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
         c.uses_subgroups = true;
         let ty = T::naga_type(&mut c.module);
         let result = c.expr(Expression::SubgroupOperationResult { ty });
-        c.stmt(Statement::SubgroupCollectiveOperation { op, collective_op: collective, argument: x.h, result });
+        c.stmt(Statement::SubgroupCollectiveOperation {
+            op,
+            collective_op: collective,
+            argument: x.h,
+            result,
+        });
         Val::from_handle(result)
     })
 }
@@ -113,7 +125,11 @@ fn subgroup_gather<T: GpuType>(mode: GatherMode, x: Val<T>) -> Val<T> {
         c.uses_subgroups = true;
         let ty = T::naga_type(&mut c.module);
         let result = c.expr(Expression::SubgroupOperationResult { ty });
-        c.stmt(Statement::SubgroupGather { mode, argument: x.h, result });
+        c.stmt(Statement::SubgroupGather {
+            mode,
+            argument: x.h,
+            result,
+        });
         Val::from_handle(result)
     })
 }
@@ -136,11 +152,41 @@ macro_rules! collective {
         }
     };
 }
-collective!(subgroup_add, So::Add, Co::Reduce, |x| x, "Sum over the subgroup.");
-collective!(subgroup_min, So::Min, Co::Reduce, |x| x, "Minimum over the subgroup.");
-collective!(subgroup_max, So::Max, Co::Reduce, |x| x, "Maximum over the subgroup.");
-collective!(subgroup_inclusive_add, So::Add, Co::InclusiveScan, |x| x, "Sum over lanes up to and including this one.");
-collective!(subgroup_exclusive_add, So::Add, Co::ExclusiveScan, |_x| T::default(), "Sum over the lanes before this one.");
+collective!(
+    subgroup_add,
+    So::Add,
+    Co::Reduce,
+    |x| x,
+    "Sum over the subgroup."
+);
+collective!(
+    subgroup_min,
+    So::Min,
+    Co::Reduce,
+    |x| x,
+    "Minimum over the subgroup."
+);
+collective!(
+    subgroup_max,
+    So::Max,
+    Co::Reduce,
+    |x| x,
+    "Maximum over the subgroup."
+);
+collective!(
+    subgroup_inclusive_add,
+    So::Add,
+    Co::InclusiveScan,
+    |x| x,
+    "Sum over lanes up to and including this one."
+);
+collective!(
+    subgroup_exclusive_add,
+    So::Add,
+    Co::ExclusiveScan,
+    |_x| T::default(),
+    "Sum over the lanes before this one."
+);
 
 pub fn subgroup_any(p: bool) -> bool {
     p
@@ -174,7 +220,10 @@ pub mod subgroup_ballot {
         super::with(|c| {
             c.uses_subgroups = true;
             let result = c.expr(super::Expression::SubgroupBallotResult);
-            c.stmt(super::Statement::SubgroupBallot { result, predicate: Some(p.h) });
+            c.stmt(super::Statement::SubgroupBallot {
+                result,
+                predicate: Some(p.h),
+            });
             super::Val::from_handle(result)
         })
     }
@@ -224,22 +273,39 @@ pub fn atomic_compare_exchange(a: &AtomicU32, current: u32, new: u32) -> u32 {
 pub mod atomic_compare_exchange {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
-    pub fn ir(a: super::Place<super::AtomicU32>, current: super::Val<u32>, new: super::Val<u32>) -> super::Val<u32> {
+    pub fn ir(
+        a: super::Place<super::AtomicU32>,
+        current: super::Val<u32>,
+        new: super::Val<u32>,
+    ) -> super::Val<u32> {
         super::atomic_cmpxchg(a.ptr, naga::Scalar::U32, current.h, new.h)
     }
 }
 
-fn atomic_cmpxchg<R>(ptr: naga::Handle<Expression>, scalar: naga::Scalar, cur: naga::Handle<Expression>, new: naga::Handle<Expression>) -> Val<R> {
+fn atomic_cmpxchg<R>(
+    ptr: naga::Handle<Expression>,
+    scalar: naga::Scalar,
+    cur: naga::Handle<Expression>,
+    new: naga::Handle<Expression>,
+) -> Val<R> {
     with(|c| {
-        let ty = c.module.generate_predeclared_type(naga::PredeclaredType::AtomicCompareExchangeWeakResult(scalar));
-        let result = c.expr(Expression::AtomicResult { ty, comparison: true });
+        let ty = c.module.generate_predeclared_type(
+            naga::PredeclaredType::AtomicCompareExchangeWeakResult(scalar),
+        );
+        let result = c.expr(Expression::AtomicResult {
+            ty,
+            comparison: true,
+        });
         c.stmt(Statement::Atomic {
             pointer: ptr,
             fun: naga::AtomicFunction::Exchange { compare: Some(cur) },
             value: new,
             result: Some(result),
         });
-        Val::from_handle(c.expr(Expression::AccessIndex { base: result, index: 0 }))
+        Val::from_handle(c.expr(Expression::AccessIndex {
+            base: result,
+            index: 0,
+        }))
     })
 }
 
@@ -249,8 +315,16 @@ macro_rules! atomic_place {
             fn rmw(self, fun: naga::AtomicFunction, v: Val<$int>) -> Val<$int> {
                 with(|c| {
                     let ty = c.ty(naga::TypeInner::Scalar($scalar));
-                    let result = c.expr(Expression::AtomicResult { ty, comparison: false });
-                    c.stmt(Statement::Atomic { pointer: self.ptr, fun, value: v.h, result: Some(result) });
+                    let result = c.expr(Expression::AtomicResult {
+                        ty,
+                        comparison: false,
+                    });
+                    c.stmt(Statement::Atomic {
+                        pointer: self.ptr,
+                        fun,
+                        value: v.h,
+                        result: Some(result),
+                    });
                     Val::from_handle(result)
                 })
             }
@@ -282,7 +356,12 @@ macro_rules! atomic_place {
                 Val::from_handle(with(|c| c.expr(Expression::Load { pointer: self.ptr })))
             }
             pub fn store(self, v: Val<$int>, _o: Ordering) {
-                with(|c| c.stmt(Statement::Store { pointer: self.ptr, value: v.h }))
+                with(|c| {
+                    c.stmt(Statement::Store {
+                        pointer: self.ptr,
+                        value: v.h,
+                    })
+                })
             }
         }
     };

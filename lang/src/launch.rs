@@ -47,7 +47,13 @@ pub fn artifact<K: 'static>(
 fn generic_suffix<K>() -> String {
     let full = std::any::type_name::<K>();
     match full.find('<') {
-        Some(i) => format!("__{}", full[i..].chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect::<String>()),
+        Some(i) => format!(
+            "__{}",
+            full[i..]
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect::<String>()
+        ),
         None => String::new(),
     }
 }
@@ -60,7 +66,10 @@ pub enum Grid<'a> {
     /// Exactly these workgroup counts.
     Groups([u32; 3]),
     /// Workgroup counts read by the GPU from a buffer (3 × u32 at `offset_elems`).
-    Indirect { args: &'a GpuBuffer<u32>, offset_elems: usize },
+    Indirect {
+        args: &'a GpuBuffer<u32>,
+        offset_elems: usize,
+    },
 }
 impl From<u32> for Grid<'_> {
     fn from(n: u32) -> Self {

@@ -23,11 +23,18 @@ fn load(name: &str) -> Scene {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let scenes = args.get(1).map(String::as_str).unwrap_or("cornell,confroom");
+    let scenes = args
+        .get(1)
+        .map(String::as_str)
+        .unwrap_or("cornell,confroom");
     let seconds: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let reference_seconds: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(20.0);
     let device = Device::best().expect("device");
-    println!("device: {} [{}]", device.info().adapter_name, device.info().backend.name());
+    println!(
+        "device: {} [{}]",
+        device.info().adapter_name,
+        device.info().backend.name()
+    );
     // (label, algorithm, coherent light)
     let configs: Vec<(String, Algorithm, bool)> = ["normal", "warp", "block_256"]
         .iter()

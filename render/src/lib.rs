@@ -20,8 +20,8 @@ pub mod shard;
 pub use gpu_scene::GpuScene;
 pub use image::Image;
 pub use renderer::{
-    Algorithm, Budget, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
-    HostTimes, RenderStats, Renderer,
+    Algorithm, Budget, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
+    RenderStats, Renderer,
 };
 pub use roulette::Roulette;
 pub use shard::Shard;

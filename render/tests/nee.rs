@@ -226,7 +226,11 @@ fn environment_light_sampling_agrees_with_implicit() {
     let nee = render(&d, &scene, opts(IntegratorKind::Nee, 24, 512, 5));
     let implicit = render(&d, &scene, opts(IntegratorKind::Path, 24, 512, 6));
     let mean = nee.mean().max_element();
-    for (k, (a, b)) in blocks(&nee, 4).iter().zip(&blocks(&implicit, 4)).enumerate() {
+    for (k, (a, b)) in blocks(&nee, 4)
+        .iter()
+        .zip(&blocks(&implicit, 4))
+        .enumerate()
+    {
         assert!(
             (*a - *b).abs().max_element() < 0.06 * mean,
             "block {k}: nee {a} vs implicit {b}"

@@ -8,14 +8,26 @@ use cohort_scenes::{Bsdf, Camera, FovAxis, Material, Scene, SceneBuilder, Shadin
 use glam::{Mat4, Vec3};
 
 fn devices() -> Vec<Device> {
-    [BackendKind::Wgpu, BackendKind::Vulkan].into_iter().filter_map(Device::for_tests).collect()
+    [BackendKind::Wgpu, BackendKind::Vulkan]
+        .into_iter()
+        .filter_map(Device::for_tests)
+        .collect()
 }
 
 fn render(d: &Device, scene: &Scene, size: u32, paths: u32, seed: u32) -> Image {
-    let opts = RenderOptions { budget: Budget::PathsPerPixel(paths), seed, size: Some((size, size)), ..Default::default() };
+    let opts = RenderOptions {
+        budget: Budget::PathsPerPixel(paths),
+        seed,
+        size: Some((size, size)),
+        ..Default::default()
+    };
     let mut r = Renderer::new(d, scene, opts).unwrap();
     let (img, stats) = r.render(|_, _| {}).unwrap();
-    assert_eq!(stats.completed_paths, paths as u64 * (size * size) as u64, "every pixel completes exactly its paths");
+    assert_eq!(
+        stats.completed_paths,
+        paths as u64 * (size * size) as u64,
+        "every pixel completes exactly its paths"
+    );
     assert!(img.paths.iter().all(|&p| p == paths));
     img
 }
@@ -25,17 +37,42 @@ fn render(d: &Device, scene: &Scene, size: u32, paths: u32, seed: u32) -> Image 
 #[test]
 fn white_furnace() {
     let (a, le) = (0.5f32, 1.0f32);
-    let cam = Camera::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(1.0, 0.3, -0.2), Vec3::Y, 70.0, FovAxis::X, 64, 64).unwrap();
+    let cam = Camera::look_at(
+        Vec3::new(0.1, 0.2, 0.3),
+        Vec3::new(1.0, 0.3, -0.2),
+        Vec3::Y,
+        70.0,
+        FovAxis::X,
+        64,
+        64,
+    )
+    .unwrap();
     let mut b = SceneBuilder::new(cam);
-    let m = b.material(Material { bsdf: Bsdf::Diffuse { reflectance: Vec3::splat(a) }, two_sided: true, emission: Some(Vec3::splat(le)) });
-    b.add_mesh("box", &cohort_scenes::shapes::cube(), &Mat4::from_scale(Vec3::splat(2.0)), m, Shading::Flat);
+    let m = b.material(Material {
+        bsdf: Bsdf::Diffuse {
+            reflectance: Vec3::splat(a),
+        },
+        two_sided: true,
+        emission: Some(Vec3::splat(le)),
+    });
+    b.add_mesh(
+        "box",
+        &cohort_scenes::shapes::cube(),
+        &Mat4::from_scale(Vec3::splat(2.0)),
+        m,
+        Shading::Flat,
+    );
     let scene = b.finish();
     let expect = le / (1.0 - a);
     for d in devices() {
         let img = render(&d, &scene, 64, 24, 3);
         let mean = img.mean();
         for c in mean.to_array() {
-            assert!((c - expect).abs() < 0.02 * expect, "furnace mean {mean} vs {expect} on {:?}", d.info().backend);
+            assert!(
+                (c - expect).abs() < 0.02 * expect,
+                "furnace mean {mean} vs {expect} on {:?}",
+                d.info().backend
+            );
         }
         // Every 8x8 block of pixels (1536 paths) is within 6% of the expectation.
         for by in 0..8 {
@@ -47,15 +84,23 @@ fn white_furnace() {
                     }
                 }
                 let m = s / 64.0;
-                assert!((m.x - expect).abs() < 0.06 * expect, "furnace block ({bx},{by}) mean {m} vs {expect}");
+                assert!(
+                    (m.x - expect).abs() < 0.06 * expect,
+                    "furnace block ({bx},{by}) mean {m} vs {expect}"
+                );
             }
         }
     }
 }
 
 fn shared(name: &str) -> Scene {
-    let path = format!("{}/../../shared/scenes/{name}/scene.xml", env!("CARGO_MANIFEST_DIR"));
-    cohort_scenes::load_mitsuba(&path).unwrap_or_else(|e| panic!("{e}")).scene
+    let path = format!(
+        "{}/../../shared/scenes/{name}/scene.xml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    cohort_scenes::load_mitsuba(&path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scene
 }
 
 /// The two backends run the same kernels on the same inputs and produce identical
@@ -64,10 +109,23 @@ fn shared(name: &str) -> Scene {
 #[test]
 fn backends_agree() {
     let scene = cohort_scenes::embedded::load("cornell").unwrap();
-    let imgs: Vec<Image> = devices().iter().map(|d| render(d, &scene, 32, 8, 7)).collect();
+    let imgs: Vec<Image> = devices()
+        .iter()
+        .map(|d| render(d, &scene, 32, 8, 7))
+        .collect();
     if imgs.len() == 2 {
-        let differ = imgs[0].pixels.iter().zip(&imgs[1].pixels).filter(|(x, y)| x.to_array().map(f32::to_bits) != y.to_array().map(f32::to_bits)).count();
-        assert_eq!(differ, 0, "{differ} of {} pixels differ between wgpu and Vulkan", imgs[0].pixels.len());
+        let differ = imgs[0]
+            .pixels
+            .iter()
+            .zip(&imgs[1].pixels)
+            .filter(|(x, y)| x.to_array().map(f32::to_bits) != y.to_array().map(f32::to_bits))
+            .count();
+        assert_eq!(
+            differ,
+            0,
+            "{differ} of {} pixels differ between wgpu and Vulkan",
+            imgs[0].pixels.len()
+        );
     }
 }
 
@@ -85,8 +143,14 @@ fn converges_on_shared_scenes() {
         let e64 = render(&d, &scene, 24, 64, 2).rms_diff(&reference);
         // 16x the paths: error / 4 expected; allow for the reference's own noise.
         let ratio = e64 / e4;
-        assert!(ratio > 0.15 && ratio < 0.4, "{name}: rms {e4} at 4 paths, {e64} at 64 (ratio {ratio})");
-        assert!(reference.mean().max_element() > 0.01, "{name}: reference is black");
+        assert!(
+            ratio > 0.15 && ratio < 0.4,
+            "{name}: rms {e4} at 4 paths, {e64} at 64 (ratio {ratio})"
+        );
+        assert!(
+            reference.mean().max_element() > 0.01,
+            "{name}: reference is black"
+        );
     }
 }
 
@@ -104,7 +168,13 @@ fn coherent_configurations_converge_to_normal() {
     };
     let scene = shared("stanford-like");
     let seeds = 6u32;
-    let run = |algorithm: Algorithm, in_patch: InPatch, group_rr: bool, compact: bool, coherent_glossy: bool, whole_group_end: Option<f32>| -> (f64, f64) {
+    let run = |algorithm: Algorithm,
+               in_patch: InPatch,
+               group_rr: bool,
+               compact: bool,
+               coherent_glossy: bool,
+               whole_group_end: Option<f32>|
+     -> (f64, f64) {
         let means: Vec<f64> = (0..seeds)
             .map(|s| {
                 let opts = RenderOptions {
@@ -130,20 +200,51 @@ fn coherent_configurations_converge_to_normal() {
         let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
         (mean, var / seeds as f64)
     };
-    let (m0, v0) = run(Algorithm::NORMAL, InPatch::Uniform, false, true, false, None);
+    let (m0, v0) = run(
+        Algorithm::NORMAL,
+        InPatch::Uniform,
+        false,
+        true,
+        false,
+        None,
+    );
     let configs = [
         (Group::Warp, InPatch::Uniform, false, true, false, None),
-        (Group::Block(256), InPatch::Uniform, false, true, false, None),
+        (
+            Group::Block(256),
+            InPatch::Uniform,
+            false,
+            true,
+            false,
+            None,
+        ),
         (Group::Grid, InPatch::Uniform, false, true, false, None),
         (Group::Warp, InPatch::Uniform, true, false, false, None),
         (Group::Block(256), InPatch::Cosine, true, false, false, None),
         (Group::Warp, InPatch::EqualArea, false, true, true, None),
         // Whole-group termination (a path that ends triggers a shared roulette).
         (Group::Warp, InPatch::Uniform, true, true, false, Some(0.5)),
-        (Group::Block(64), InPatch::Uniform, true, false, false, Some(0.3)),
+        (
+            Group::Block(64),
+            InPatch::Uniform,
+            true,
+            false,
+            false,
+            Some(0.3),
+        ),
     ];
     for (group, in_patch, rr, compact, glossy, whole) in configs {
-        let (m, v) = run(Algorithm { group, coherent: true }, in_patch, rr, compact, glossy, whole);
+        let (m, v) = run(
+            Algorithm {
+                group,
+                coherent: true,
+            },
+            in_patch,
+            rr,
+            compact,
+            glossy,
+            whole,
+        );
         let se = (v + v0).sqrt();
         assert!(
             (m - m0).abs() < 5.0 * se + 0.01 * m0,

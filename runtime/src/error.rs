@@ -104,7 +104,11 @@ pub enum RuntimeError {
         "kernel `{kernel}`: its #[workgroup] arrays take {bytes} bytes per workgroup, more \
          than the device's {max}: use smaller arrays (or fewer per kernel)"
     )]
-    WorkgroupMemoryTooLarge { kernel: String, bytes: u64, max: u64 },
+    WorkgroupMemoryTooLarge {
+        kernel: String,
+        bytes: u64,
+        max: u64,
+    },
 
     #[error(
         "kernel `{kernel}`: workgroup size {size:?} exceeds the device limits (at most \

@@ -26,7 +26,9 @@ mod wgpu_backend;
 
 pub use artifact::*;
 pub use buffer::{BufferArg, GpuBuffer};
-pub use device::{Batch, Completed, Device, DeviceInfo, Dispatch, DispatchStats, ReadBack, Submission};
+pub use device::{
+    Batch, Completed, Device, DeviceInfo, Dispatch, DispatchStats, ReadBack, Submission,
+};
 pub use error::{Result, RuntimeError};
 
 /// Which GPU API a [`Device`] drives.

@@ -53,7 +53,10 @@ fn spot_defaults_are_mitsubas() {
     // The spot looks along its +z: here, down.
     let axis = to_world.transform_vector3(Vec3::Z);
     assert!((axis - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-5, "{axis}");
-    assert_eq!(to_world.transform_point3(Vec3::ZERO), Vec3::new(0.0, 1.0, 0.0));
+    assert_eq!(
+        to_world.transform_point3(Vec3::ZERO),
+        Vec3::new(0.0, 1.0, 0.0)
+    );
     let e = lights(r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="12"/></emitter>"#).unwrap_err();
     assert!(e.contains("beam_width 12"), "{e}");
     let e = lights(r#"<emitter type="spot"><texture type="bitmap" name="texture"><string name="filename" value="x.png"/></texture></emitter>"#).unwrap_err();
@@ -76,5 +79,8 @@ fn directional_light_direction() {
     };
     let want = Mat4::from_rotation_x(90f32.to_radians()).transform_vector3(Vec3::Z);
     assert!((direction - want).length() < 1e-5, "{direction} vs {want}");
-    assert!(lights(r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#).is_err());
+    assert!(lights(
+        r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#
+    )
+    .is_err());
 }

@@ -414,7 +414,9 @@ fn nested_integrators_use_the_inner_one() {
         read(r#"<integrator type="direct"><integer name="emitter_samples" value="4"/><boolean name="hide_emitters" value="true"/></integrator>"#)
             .unwrap();
     assert_eq!((i.max_depth, i.hide_emitters), (2, true));
-    assert!(w.iter().any(|w| w.message.contains("'direct' rendered by 'path' with max_depth 2")));
+    assert!(w.iter().any(|w| w
+        .message
+        .contains("'direct' rendered by 'path' with max_depth 2")));
     // max_depth 0 is valid (Mitsuba renders black).
     assert_eq!(
         read(r#"<integrator type="path"><integer name="max_depth" value="0"/></integrator>"#)

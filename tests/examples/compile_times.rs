@@ -7,7 +7,10 @@
 use std::time::Instant;
 
 fn main() {
-    let reps = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(25usize);
+    let reps = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(25usize);
     println!("| kernel variant | build (ms) | build + emit (ms) | WGSL bytes | SPIR-V words |");
     println!("|---|---:|---:|---:|---:|");
     let mut worst = 0f64;
@@ -29,7 +32,10 @@ fn main() {
         total.sort_by(f64::total_cmp);
         let (b, t) = (build[reps / 2], total[reps / 2]);
         worst = worst.max(t);
-        println!("| {} | {b:.3} | {t:.3} | {} | {} |", v.name, sizes.0, sizes.1);
+        println!(
+            "| {} | {b:.3} | {t:.3} | {} | {} |",
+            v.name, sizes.0, sizes.1
+        );
     }
     println!("\nslowest build + emit: {worst:.3} ms (median of {reps})");
 }

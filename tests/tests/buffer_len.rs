@@ -8,12 +8,7 @@ mod common;
 use cohort::prelude::*;
 
 #[kernel(workgroup = 64)]
-pub fn lengths(
-    #[builtin(global_index)] gi: u32,
-    words: &[u32],
-    vectors: &[Vec4],
-    out: &mut [u32],
-) {
+pub fn lengths(#[builtin(global_index)] gi: u32, words: &[u32], vectors: &[Vec4], out: &mut [u32]) {
     if gi == 0 {
         out[0] = words.len() as u32;
         out[1] = vectors.len() as u32;
@@ -31,7 +26,12 @@ fn len_is_the_element_count_even_when_empty() {
             let out = d.alloc::<u32>(4).unwrap();
             lengths::launch(&d, 1u32, &words, &vectors, &out).unwrap();
             let got = d.read(&out).unwrap();
-            assert_eq!(got, vec![nw as u32, nv as u32, (nw == 0) as u32, 4], "{:?}: {nw} words, {nv} vectors", d.info().backend);
+            assert_eq!(
+                got,
+                vec![nw as u32, nv as u32, (nw == 0) as u32, 4],
+                "{:?}: {nw} words, {nv} vectors",
+                d.info().backend
+            );
         }
     }
 }

@@ -7,7 +7,14 @@
 use cohort::ir::{self, builtin, AsPlace, Buffer, Val};
 use cohort::{Group, KernelInfo, Spec};
 
-static INFO: KernelInfo = KernelInfo { name: "broken", file: "src/broken.rs", line: 42, column: 7, workgroup_size: 64, group: Group::Thread };
+static INFO: KernelInfo = KernelInfo {
+    name: "broken",
+    file: "src/broken.rs",
+    line: 42,
+    column: 7,
+    workgroup_size: 64,
+    group: Group::Thread,
+};
 
 #[test]
 fn validation_failure_is_reported_at_the_kernel() {
@@ -23,7 +30,10 @@ fn validation_failure_is_reported_at_the_kernel() {
         Err(e) => e,
     };
     let msg = err.to_string();
-    assert!(msg.starts_with("src/broken.rs:42:7: kernel `broken`"), "{msg}");
+    assert!(
+        msg.starts_with("src/broken.rs:42:7: kernel `broken`"),
+        "{msg}"
+    );
     assert!(msg.contains("compiler bug"), "{msg}");
     assert!(msg.contains("validation"), "{msg}");
     assert_eq!(err.stage, "validate");

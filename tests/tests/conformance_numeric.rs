@@ -173,7 +173,14 @@ fn fast_math_candidates(name: &str, operands: &[f32]) -> Option<Vec<f32>> {
                 for b in 0..4 {
                     for c in 0..4 {
                         let d = 6 - a - b - c;
-                        if a == b || a == c || b == c || !(0..4).contains(&d) || d == a || d == b || d == c {
+                        if a == b
+                            || a == c
+                            || b == c
+                            || !(0..4).contains(&d)
+                            || d == a
+                            || d == b
+                            || d == c
+                        {
                             continue;
                         }
                         out.push(((q[a] + q[b]) + q[c]) + q[d]);
@@ -220,13 +227,23 @@ impl Model {
         // vector's components in another order.
         if !self.nan_inf || (!self.subnormals && name == "/") {
             if let Some(candidates) = fast_math_candidates(name, operands) {
-                if candidates.iter().any(|c| same(got, *c) || (c.is_finite() && got.is_finite() && ulps(got, *c) <= DIV_SQRT_ULPS)) {
+                if candidates.iter().any(|c| {
+                    same(got, *c)
+                        || (c.is_finite() && got.is_finite() && ulps(got, *c) <= DIV_SQRT_ULPS)
+                }) {
                     return true;
                 }
             }
         }
-        let div_sqrt = name == "/" || name == "recip" || name.starts_with("sqrt") || name.starts_with("powi(-");
-        !self.exact_div_sqrt && div_sqrt && want.is_finite() && got.is_finite() && ulps(got, want) <= DIV_SQRT_ULPS
+        let div_sqrt = name == "/"
+            || name == "recip"
+            || name.starts_with("sqrt")
+            || name.starts_with("powi(-");
+        !self.exact_div_sqrt
+            && div_sqrt
+            && want.is_finite()
+            && got.is_finite()
+            && ulps(got, want) <= DIV_SQRT_ULPS
     }
 }
 
@@ -283,16 +300,19 @@ fn comparisons_and_classification() {
         let gpu = d.read(&o).unwrap();
         let m = model(&d);
         for k in 0..n {
-            r.check(gpu[k] == host[k] || m.unspecified(&[a[k], b[k]], 0.0), || {
-                format!(
-                    "{} {:?} vs {:?}: flags {:019b}, host {:019b} (bit i: see float_compare)",
-                    backend(&d),
-                    a[k],
-                    b[k],
-                    gpu[k],
-                    host[k]
-                )
-            });
+            r.check(
+                gpu[k] == host[k] || m.unspecified(&[a[k], b[k]], 0.0),
+                || {
+                    format!(
+                        "{} {:?} vs {:?}: flags {:019b}, host {:019b} (bit i: see float_compare)",
+                        backend(&d),
+                        a[k],
+                        b[k],
+                        gpu[k],
+                        host[k]
+                    )
+                },
+            );
         }
     }
     r.finish("comparisons");
@@ -450,27 +470,28 @@ fn float_operators_and_binary_methods() {
             for (j, (name, want)) in binary_reference(a[k], b[k]).into_iter().enumerate() {
                 let got = gpu[k * BINARY_N + j];
                 let (x, y) = (a[k], b[k]);
-                let ok = m.unspecified(&[x, y], want) || match name {
-                    // Either Rust's fused result or `x * y + 0.25` rounded twice (section 7).
-                    "mul_add(y, 0.25)" => same(got, want) || same(got, x * y + 0.25),
-                    // Bounded where LANGUAGE.md states a bound: normal operands; for powf the
-                    // bound scales with |y log2 x| (drivers compute exp2(y * log2(x))).
-                    "powf" if x.is_subnormal() || y.is_subnormal() => {
-                        !want.is_nan() || got.is_nan()
-                    }
-                    "powf" => {
-                        within(got, want, (POWF_ULPS as f32 * (y * x.abs().log2()).abs().max(1.0)).min(u32::MAX as f32) as u32)
+                let ok = m.unspecified(&[x, y], want)
+                    || match name {
+                        // Either Rust's fused result or `x * y + 0.25` rounded twice (section 7).
+                        "mul_add(y, 0.25)" => same(got, want) || same(got, x * y + 0.25),
+                        // Bounded where LANGUAGE.md states a bound: normal operands; for powf the
+                        // bound scales with |y log2 x| (drivers compute exp2(y * log2(x))).
+                        "powf" if x.is_subnormal() || y.is_subnormal() => {
+                            !want.is_nan() || got.is_nan()
+                        }
+                        "powf" => {
+                            within(got, want, (POWF_ULPS as f32 * (y * x.abs().log2()).abs().max(1.0)).min(u32::MAX as f32) as u32)
                             // log2's absolute error (2^-21 on [0.5, 2]) times |y|, in the exponent.
                             || (got.is_finite() && want.is_finite() && got.signum() == want.signum() && (got as f64 / want as f64).log2().abs() <= y.abs() as f64 * POWF_LOG2_ABS + 1e-4)
-                    }
-                    "atan2" if x.is_subnormal() || y.is_subnormal() => {
-                        !want.is_nan() || got.is_nan()
-                    }
-                    _ => match binary_bound(name) {
-                        Some(u) => within(got, want, u),
-                        None => m.allows(name, &[x, y], got, want),
-                    },
-                };
+                        }
+                        "atan2" if x.is_subnormal() || y.is_subnormal() => {
+                            !want.is_nan() || got.is_nan()
+                        }
+                        _ => match binary_bound(name) {
+                            Some(u) => within(got, want, u),
+                            None => m.allows(name, &[x, y], got, want),
+                        },
+                    };
                 r.check(ok, || {
                     format!(
                         "{} {:?} {name} {:?} = {got:?} ({:#010x}), Rust {want:?} ({:#010x})",

@@ -38,11 +38,17 @@ fn workgroup_memory_over_the_limit_is_refused_before_dispatch() {
         let err = too_much_workgroup_memory::launch(&d, 64u32, &out).unwrap_err();
         let msg = err.to_string();
         assert!(
-            matches!(&err, cohort::Error::Runtime(RuntimeError::WorkgroupMemoryTooLarge { bytes: 98304, .. })),
+            matches!(
+                &err,
+                cohort::Error::Runtime(RuntimeError::WorkgroupMemoryTooLarge { bytes: 98304, .. })
+            ),
             "{:?}: {msg}",
             d.info().backend
         );
-        assert!(msg.contains("too_much_workgroup_memory") && msg.contains("98304"), "{msg}");
+        assert!(
+            msg.contains("too_much_workgroup_memory") && msg.contains("98304"),
+            "{msg}"
+        );
         some_workgroup_memory::launch(&d, 64u32, &out).unwrap();
         let got = d.read(&out).unwrap();
         assert_eq!(got, (0..64u32).rev().collect::<Vec<_>>());

@@ -34,7 +34,11 @@ fn saxpy_matches_host() {
         let xb = d.upload(&x).unwrap();
         let yb = d.upload(&y0).unwrap();
         saxpy::launch(d, n, &p, &xb, &yb).unwrap();
-        d.read(&yb).unwrap().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        d.read(&yb)
+            .unwrap()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
     });
     let mut host = y0.clone();
     for_each_invocation(n, saxpy::INFO.workgroup_size, Group::Thread, |inv| {
@@ -49,9 +53,18 @@ fn saxpy_matches_host() {
         // which is many ulps of a result that cancels. Bound: twice that.
         for k in 0..n as usize {
             let bound = 2.0 * f32::EPSILON * (p.a * x[k]).abs().max(y0[k].abs());
-            assert!((o[k] - host[k]).abs() <= bound, "saxpy element {k}: {} vs {} (bound {bound})", o[k], host[k]);
+            assert!(
+                (o[k] - host[k]).abs() <= bound,
+                "saxpy element {k}: {} vs {} (bound {bound})",
+                o[k],
+                host[k]
+            );
         }
-        assert_eq!(o[n as usize - 1], y0[n as usize - 1], "bounds check must leave the tail alone");
+        assert_eq!(
+            o[n as usize - 1],
+            y0[n as usize - 1],
+            "bounds check must leave the tail alone"
+        );
     }
 }
 
@@ -60,10 +73,18 @@ fn structs_trace_spheres() {
     use cohort_tests::kernels::rays::*;
     let mut rng = Rng(7);
     let spheres: Vec<Sphere> = (0..8)
-        .map(|_| Sphere { center: Vec3::new(rng.f32(-4.0, 4.0), rng.f32(-4.0, 4.0), rng.f32(5.0, 15.0)), radius: rng.f32(0.5, 2.0) })
+        .map(|_| Sphere {
+            center: Vec3::new(rng.f32(-4.0, 4.0), rng.f32(-4.0, 4.0), rng.f32(5.0, 15.0)),
+            radius: rng.f32(0.5, 2.0),
+        })
         .collect();
     let rays_in: Vec<Ray> = (0..500)
-        .map(|_| Ray { origin: Vec3::ZERO, tmin: 1e-3, dir: Vec3::new(rng.f32(-0.4, 0.4), rng.f32(-0.4, 0.4), 1.0).normalize(), tmax: 1e30 })
+        .map(|_| Ray {
+            origin: Vec3::ZERO,
+            tmin: 1e-3,
+            dir: Vec3::new(rng.f32(-0.4, 0.4), rng.f32(-0.4, 0.4), 1.0).normalize(),
+            tmax: 1e30,
+        })
         .collect();
     let outs = run_all("trace_spheres", |d| {
         let r = d.upload(&rays_in).unwrap();
@@ -73,17 +94,33 @@ fn structs_trace_spheres() {
         d.read(&h).unwrap()
     });
     let mut host = vec![Hit::default(); rays_in.len()];
-    for_each_invocation(rays_in.len() as u32, 64, Group::Thread, |inv| trace_spheres(inv.global_index, &rays_in, &spheres, &mut host));
+    for_each_invocation(rays_in.len() as u32, 64, Group::Thread, |inv| {
+        trace_spheres(inv.global_index, &rays_in, &spheres, &mut host)
+    });
     let hits = host.iter().filter(|h| h.hit == 1).count();
-    assert!(hits > 20 && hits < 490, "test scene should mix hits and misses, got {hits}");
+    assert!(
+        hits > 20 && hits < 490,
+        "test scene should mix hits and misses, got {hits}"
+    );
     for o in outs {
         for (g, h) in o.iter().zip(&host) {
             assert_eq!((g.hit, g.sphere), (h.hit, h.sphere));
             // The hit distance comes from b^2 - c, which cancels near grazing hits, and
             // drivers may contract it into FMAs: t agrees to 1e-4 relative, and the normal
             // built from it to 1e-3.
-            assert!((g.t - h.t).abs() <= 1e-4 * h.t.abs().max(1.0), "t: {} vs {}", g.t, h.t);
-            assert_close("normal", &g.normal.to_array(), &h.normal.to_array(), 64, 1e-3);
+            assert!(
+                (g.t - h.t).abs() <= 1e-4 * h.t.abs().max(1.0),
+                "t: {} vs {}",
+                g.t,
+                h.t
+            );
+            assert_close(
+                "normal",
+                &g.normal.to_array(),
+                &h.normal.to_array(),
+                64,
+                1e-3,
+            );
         }
     }
 }
@@ -100,7 +137,9 @@ fn loops_collatz() {
         (d.read(&a).unwrap(), d.read(&b).unwrap())
     });
     let (mut ha, mut hb) = (vec![0u32; seeds.len()], vec![0u32; seeds.len()]);
-    for_each_invocation(seeds.len() as u32, 64, Group::Thread, |inv| collatz(inv.global_index, &seeds, &mut ha, &mut hb));
+    for_each_invocation(seeds.len() as u32, 64, Group::Thread, |inv| {
+        collatz(inv.global_index, &seeds, &mut ha, &mut hb)
+    });
     assert_eq!(ha[26 / 37], 0, "seed 1 takes no steps");
     for o in outs {
         assert_eq!(o, (ha.clone(), hb.clone()));
@@ -111,14 +150,25 @@ fn loops_collatz() {
 fn mut_helpers_sort4() {
     use cohort_tests::kernels::sort4::*;
     let mut rng = Rng(3);
-    let v: Vec<Vec4> = (0..300).map(|_| Vec4::new(rng.f32(-200.0, 200.0), rng.f32(-9.0, 9.0), rng.f32(-9.0, 9.0), rng.f32(-200.0, 200.0))).collect();
+    let v: Vec<Vec4> = (0..300)
+        .map(|_| {
+            Vec4::new(
+                rng.f32(-200.0, 200.0),
+                rng.f32(-9.0, 9.0),
+                rng.f32(-9.0, 9.0),
+                rng.f32(-200.0, 200.0),
+            )
+        })
+        .collect();
     let outs = run_all("sort4", |d| {
         let b = d.upload(&v).unwrap();
         sort4::launch(d, v.len() as u32, &b).unwrap();
         d.read(&b).unwrap()
     });
     let mut host = v.clone();
-    for_each_invocation(v.len() as u32, 32, Group::Thread, |inv| sort4(inv.global_index, &mut host));
+    for_each_invocation(v.len() as u32, 32, Group::Thread, |inv| {
+        sort4(inv.global_index, &mut host)
+    });
     for x in &host {
         assert!(x.x <= x.y && x.y <= x.z, "not sorted: {x}");
     }
@@ -136,10 +186,16 @@ fn generic_over_trait() {
             let x = d.upload(xs).unwrap();
             let y = d.alloc::<f32>(xs.len()).unwrap();
             apply_curve::launch::<C>(d, xs.len() as u32, &x, &y).unwrap();
-            d.read(&y).unwrap().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            d.read(&y)
+                .unwrap()
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
         });
         let mut host = vec![0f32; xs.len()];
-        for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| apply_curve::<C>(inv.global_index, xs, &mut host));
+        for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| {
+            apply_curve::<C>(inv.global_index, xs, &mut host)
+        });
         for o in &outs {
             let o: Vec<f32> = o.iter().map(|b| f32::from_bits(*b)).collect();
             assert_close("curve", &o, &host, 2, 1e-6);
@@ -149,15 +205,21 @@ fn generic_over_trait() {
     let sq = run::<Square>(&xs);
     let tent = run::<Tent>(&xs);
     assert_ne!(sq, tent, "two strategies must give two kernels");
-    let a = apply_curve::artifact::<Square>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread)).unwrap();
-    let b = apply_curve::artifact::<Tent>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread)).unwrap();
+    let a =
+        apply_curve::artifact::<Square>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread))
+            .unwrap();
+    let b =
+        apply_curve::artifact::<Tent>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread))
+            .unwrap();
     assert_ne!(a.wgsl, b.wgsl);
 }
 
 #[test]
 fn workgroup_reduction() {
     use cohort_tests::kernels::reduce::*;
-    let input: Vec<u32> = (0..5000u32).map(|i| i.wrapping_mul(2654435761) >> 20).collect();
+    let input: Vec<u32> = (0..5000u32)
+        .map(|i| i.wrapping_mul(2654435761) >> 20)
+        .collect();
     let groups = input.len().div_ceil(256);
     let outs = run_all("reduce_sum", |d| {
         let i = d.upload(&input).unwrap();
@@ -178,9 +240,17 @@ fn subgroup_ballot_and_scan() {
     for d in devices() {
         let sg = d.info().subgroup_size;
         let f = d.upload(&flags).unwrap();
-        let (e, i, v) = (d.alloc::<u32>(200).unwrap(), d.alloc::<u32>(200).unwrap(), d.alloc::<u32>(200).unwrap());
+        let (e, i, v) = (
+            d.alloc::<u32>(200).unwrap(),
+            d.alloc::<u32>(200).unwrap(),
+            d.alloc::<u32>(200).unwrap(),
+        );
         subgroup_scan::launch(&d, 200u32, &f, &e, &i, &v).unwrap();
-        let (e, i, v) = (d.read(&e).unwrap(), d.read(&i).unwrap(), d.read(&v).unwrap());
+        let (e, i, v) = (
+            d.read(&e).unwrap(),
+            d.read(&i).unwrap(),
+            d.read(&v).unwrap(),
+        );
         for (k, chunk) in flags.chunks(sg as usize).enumerate() {
             let base = k * sg as usize;
             let mut acc = 0;
@@ -191,8 +261,12 @@ fn subgroup_ballot_and_scan() {
                 let below: u32 = chunk[..j].iter().sum();
                 let total: u32 = chunk.iter().sum();
                 let full = chunk.len() == sg as usize;
-                let expect = below + (chunk[0] << 8) + ((total > 0) as u32) * (1 << 16)
-                    + ((total == sg) as u32 * (1 << 17)) + (total << 20) + (sg << 26);
+                let expect = below
+                    + (chunk[0] << 8)
+                    + ((total > 0) as u32) * (1 << 16)
+                    + ((total == sg) as u32 * (1 << 17))
+                    + (total << 20)
+                    + (sg << 26);
                 if full {
                     assert_eq!(v[base + j], expect, "votes at {}", base + j);
                 }
@@ -204,7 +278,9 @@ fn subgroup_ballot_and_scan() {
 #[test]
 fn atomic_histogram() {
     use cohort_tests::kernels::histogram::*;
-    let values: Vec<u32> = (0..4096u32).map(|i| i.wrapping_mul(2654435761u32.wrapping_add(i)) % 1000 + 5).collect();
+    let values: Vec<u32> = (0..4096u32)
+        .map(|i| i.wrapping_mul(2654435761u32.wrapping_add(i)) % 1000 + 5)
+        .collect();
     let outs = run_all("histogram", |d| {
         let v = d.upload(&values).unwrap();
         let bins = d.alloc::<u32>(16).unwrap();
@@ -213,8 +289,13 @@ fn atomic_histogram() {
         (d.read(&bins).unwrap(), d.read(&stats).unwrap())
     });
     let bins: Vec<AtomicU32> = (0..16).map(|_| AtomicU32::new(0)).collect();
-    let stats: Vec<AtomicU32> = [0, u32::MAX, 0, 0].into_iter().map(AtomicU32::new).collect();
-    for_each_invocation(values.len() as u32, 128, Group::Thread, |inv| histogram(inv.global_index, &values, &bins, &stats));
+    let stats: Vec<AtomicU32> = [0, u32::MAX, 0, 0]
+        .into_iter()
+        .map(AtomicU32::new)
+        .collect();
+    for_each_invocation(values.len() as u32, 128, Group::Thread, |inv| {
+        histogram(inv.global_index, &values, &bins, &stats)
+    });
     let hb: Vec<u32> = bins.iter().map(|b| b.load(Ordering::Relaxed)).collect();
     let hs: Vec<u32> = stats.iter().map(|b| b.load(Ordering::Relaxed)).collect();
     assert_eq!(hb.iter().sum::<u32>(), values.len() as u32);
@@ -236,8 +317,16 @@ fn group_levels_share_leader_value() {
             group_pick::launch_spec(&d, &spec, n, &p, &out).unwrap();
             let gpu = d.read(&out).unwrap();
             let mut host = vec![0u32; n as usize];
-            for_each_invocation(n, spec.workgroup_size, group, |inv| group_pick(inv.global_index, &p, &mut host));
-            assert_eq!(gpu, host, "{group:?} on {:?} ({})", d.info().backend, spec.suffix());
+            for_each_invocation(n, spec.workgroup_size, group, |inv| {
+                group_pick(inv.global_index, &p, &mut host)
+            });
+            assert_eq!(
+                gpu,
+                host,
+                "{group:?} on {:?} ({})",
+                d.info().backend,
+                spec.suffix()
+            );
             let distinct: std::collections::HashSet<_> = gpu.iter().collect();
             let expected = match group {
                 Group::Thread => n as usize,
@@ -253,7 +342,9 @@ fn group_levels_share_leader_value() {
         let out = d.alloc::<u32>(n as usize).unwrap();
         group_pick::launch_spec(&d, &portable, n, &p, &out).unwrap();
         let mut host = vec![0u32; n as usize];
-        for_each_invocation(n, 256, Group::Warp, |inv| group_pick(inv.global_index, &p, &mut host));
+        for_each_invocation(n, 256, Group::Warp, |inv| {
+            group_pick(inv.global_index, &p, &mut host)
+        });
         assert_eq!(d.read(&out).unwrap(), host);
     }
 }
@@ -268,21 +359,35 @@ fn group_any_is_per_group() {
     let mut rng = Rng(7);
     let values: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
     // About one voter per 400 invocations: most warps have none, most blocks of 256 some.
-    let p = VoteParams { threshold: u32::MAX / 400, n };
+    let p = VoteParams {
+        threshold: u32::MAX / 400,
+        n,
+    };
     let expected = |group_of: &dyn Fn(u32) -> u32| -> Vec<u32> {
         let mut any = std::collections::HashMap::new();
         for i in 0..n {
             *any.entry(group_of(i)).or_insert(false) |= values[i as usize] < p.threshold;
         }
-        (0..n).map(|i| if any[&group_of(i)] { 0b101 } else { 0 }).collect()
+        (0..n)
+            .map(|i| if any[&group_of(i)] { 0b101 } else { 0 })
+            .collect()
     };
     for d in devices() {
         let vals = d.upload(&values).unwrap();
         let mut specs = vec![(Group::Thread, group_vote::spec(&d, Some(Group::Thread)))];
-        specs.push((Group::Warp, cohort::Spec::portable(&group_vote::INFO, Group::Warp)));
+        specs.push((
+            Group::Warp,
+            cohort::Spec::portable(&group_vote::INFO, Group::Warp),
+        ));
         specs.push((Group::Warp, group_vote::spec(&d, Some(Group::Warp))));
-        specs.push((Group::Block(256), group_vote::spec(&d, Some(Group::Block(256)))));
-        specs.push((Group::Block(64), group_vote::spec(&d, Some(Group::Block(64)))));
+        specs.push((
+            Group::Block(256),
+            group_vote::spec(&d, Some(Group::Block(256))),
+        ));
+        specs.push((
+            Group::Block(64),
+            group_vote::spec(&d, Some(Group::Block(64))),
+        ));
         for (group, spec) in specs {
             let out = d.alloc::<u32>(n as usize).unwrap();
             group_vote::launch_spec(&d, &spec, n, &p, &vals, &out).unwrap();
@@ -293,22 +398,44 @@ fn group_any_is_per_group() {
                 Group::Block(b) => expected(&|i| i / b),
                 Group::Grid => unreachable!(),
             };
-            assert!(want.iter().any(|&w| w != 0) && want.iter().any(|&w| w == 0), "{group:?}: the inputs must give both outcomes");
-            assert_eq!(gpu, want, "{group:?} on {:?} ({})", d.info().backend, spec.suffix());
+            assert!(
+                want.iter().any(|&w| w != 0) && want.iter().any(|&w| w == 0),
+                "{group:?}: the inputs must give both outcomes"
+            );
+            assert_eq!(
+                gpu,
+                want,
+                "{group:?} on {:?} ({})",
+                d.info().backend,
+                spec.suffix()
+            );
         }
     }
     // On the host every invocation is its own group.
     let mut host = vec![0u32; n as usize];
-    for_each_invocation(n, 256, Group::Thread, |inv| group_vote(inv.global_index, &p, &values, &mut host));
-    let own: Vec<u32> = values.iter().map(|&v| if v < p.threshold { 0b101 } else { 0 }).collect();
+    for_each_invocation(n, 256, Group::Thread, |inv| {
+        group_vote(inv.global_index, &p, &values, &mut host)
+    });
+    let own: Vec<u32> = values
+        .iter()
+        .map(|&v| if v < p.threshold { 0b101 } else { 0 })
+        .collect();
     assert_eq!(host, own);
-    let err = match cohort::emit::emit(&group_vote::build(&cohort::Spec::portable(&group_vote::INFO, Group::Grid))) {
+    let err = match cohort::emit::emit(&group_vote::build(&cohort::Spec::portable(
+        &group_vote::INFO,
+        Group::Grid,
+    ))) {
         Ok(_) => panic!("group_any built at grid level"),
         Err(e) => e,
     };
     let msg = err.to_string();
     assert_eq!(err.stage, "build");
-    assert!(msg.contains("group_vote.rs") && msg.contains("kernel `group_vote`") && msg.contains("group_any"), "{msg}");
+    assert!(
+        msg.contains("group_vote.rs")
+            && msg.contains("kernel `group_vote`")
+            && msg.contains("group_any"),
+        "{msg}"
+    );
     assert!(!msg.contains("compiler bug"), "{msg}");
 }
 
@@ -316,7 +443,10 @@ fn group_any_is_per_group() {
 fn casts_and_bits() {
     use cohort_tests::kernels::bits::*;
     let mut rng = Rng(99);
-    let input: Vec<u32> = (0..1000).map(|_| rng.next_u32()).chain([0, 1, u32::MAX, 0x8000_0000]).collect();
+    let input: Vec<u32> = (0..1000)
+        .map(|_| rng.next_u32())
+        .chain([0, 1, u32::MAX, 0x8000_0000])
+        .collect();
     let outs = run_all("bits", |d| {
         let i = d.upload(&input).unwrap();
         let o = d.alloc::<UVec4>(input.len()).unwrap();
@@ -324,7 +454,9 @@ fn casts_and_bits() {
         d.read(&o).unwrap()
     });
     let mut host = vec![UVec4::ZERO; input.len()];
-    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| bits(inv.global_index, &input, &mut host));
+    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| {
+        bits(inv.global_index, &input, &mut host)
+    });
     for o in outs {
         assert_eq!(o, host);
     }
@@ -348,7 +480,9 @@ fn local_array_stack() {
         d.read(&o).unwrap()
     });
     let mut host = vec![0u32; qs.len()];
-    for_each_invocation(qs.len() as u32, 64, Group::Thread, |inv| stack_walk(inv.global_index, &qs, &mut host));
+    for_each_invocation(qs.len() as u32, 64, Group::Thread, |inv| {
+        stack_walk(inv.global_index, &qs, &mut host)
+    });
     for (q, h) in qs.iter().zip(&host) {
         let sum: u32 = (q.x..q.y).sum();
         assert_eq!(h & 0xfffff, sum & 0xfffff);
@@ -374,12 +508,26 @@ fn transcendental_math() {
         })
         .collect();
     let mut host = vec![Vec4::ZERO; xs.len()];
-    for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| mathfns(inv.global_index, &xs, &mut host));
+    for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| {
+        mathfns(inv.global_index, &xs, &mut host)
+    });
     for w in outs.windows(2) {
-        assert_close("mathfns wgpu vs vulkan", &flatten_vec4(&w[0]), &flatten_vec4(&w[1]), 4, 1e-6);
+        assert_close(
+            "mathfns wgpu vs vulkan",
+            &flatten_vec4(&w[0]),
+            &flatten_vec4(&w[1]),
+            4,
+            1e-6,
+        );
     }
     for o in &outs {
-        assert_close("mathfns gpu vs host", &flatten_vec4(o), &flatten_vec4(&host), 64, 1e-5);
+        assert_close(
+            "mathfns gpu vs host",
+            &flatten_vec4(o),
+            &flatten_vec4(&host),
+            64,
+            1e-5,
+        );
     }
 }
 
@@ -387,7 +535,16 @@ fn transcendental_math() {
 fn vector_and_matrix_math() {
     use cohort_tests::kernels::vectors::*;
     let mut rng = Rng(11);
-    let input: Vec<Vec4> = (0..300).map(|_| Vec4::new(rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0), rng.f32(0.1, 3.0), rng.f32(0.0, 2.0))).collect();
+    let input: Vec<Vec4> = (0..300)
+        .map(|_| {
+            Vec4::new(
+                rng.f32(-3.0, 3.0),
+                rng.f32(-3.0, 3.0),
+                rng.f32(0.1, 3.0),
+                rng.f32(0.0, 2.0),
+            )
+        })
+        .collect();
     let outs: Vec<Vec<Vec4>> = devices()
         .iter()
         .map(|d| {
@@ -398,8 +555,16 @@ fn vector_and_matrix_math() {
         })
         .collect();
     let mut host = vec![Vec4::ZERO; input.len()];
-    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| vectors(inv.global_index, &input, &mut host));
+    for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| {
+        vectors(inv.global_index, &input, &mut host)
+    });
     for o in &outs {
-        assert_close("vectors gpu vs host", &flatten_vec4(o), &flatten_vec4(&host), 64, 1e-4);
+        assert_close(
+            "vectors gpu vs host",
+            &flatten_vec4(o),
+            &flatten_vec4(&host),
+            64,
+            1e-4,
+        );
     }
 }

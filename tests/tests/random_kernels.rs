@@ -199,14 +199,23 @@ fn ir_f(e: &F, i: In) -> Val<f32> {
     }
 }
 
-static INFO: KernelInfo = KernelInfo { name: "random_expr", file: file!(), line: line!(), column: 1, workgroup_size: 64, group: Group::Thread };
+static INFO: KernelInfo = KernelInfo {
+    name: "random_expr",
+    file: file!(),
+    line: line!(),
+    column: 1,
+    workgroup_size: 64,
+    group: Group::Thread,
+};
 
 #[test]
 fn random_arithmetic_kernels_agree_everywhere() {
     let n = 256usize;
     let mut rng = Rng(0x5eed_1234);
     let a: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
-    let b: Vec<u32> = (0..n).map(|k| if k % 7 == 0 { 0 } else { rng.next_u32() }).collect();
+    let b: Vec<u32> = (0..n)
+        .map(|k| if k % 7 == 0 { 0 } else { rng.next_u32() })
+        .collect();
     let x: Vec<f32> = (0..n).map(|_| rng.f32(-1000.0, 1000.0)).collect();
     let y: Vec<f32> = (0..n).map(|_| rng.f32(-4.0, 4.0)).collect();
     let devs = devices();
@@ -228,24 +237,46 @@ fn random_arithmetic_kernels_agree_everywhere() {
             ir::place_index(ou.as_place(), gi).set(ir_u(&ut, i));
             ir::place_index(of.as_place(), gi).set(ir_f(&ft, i));
         });
-        let art = cohort::emit::compile(&built, format!("random_expr_{k}")).unwrap_or_else(|e| panic!("{e}\n{ut:?}\n{ft:?}"));
-        let host_u_out: Vec<u32> = (0..n).map(|j| host_u(&ut, a[j], b[j], x[j], y[j])).collect();
-        let host_f_out: Vec<u32> = (0..n).map(|j| host_f(&ft, a[j], b[j], x[j], y[j]).to_bits()).collect();
+        let art = cohort::emit::compile(&built, format!("random_expr_{k}"))
+            .unwrap_or_else(|e| panic!("{e}\n{ut:?}\n{ft:?}"));
+        let host_u_out: Vec<u32> = (0..n)
+            .map(|j| host_u(&ut, a[j], b[j], x[j], y[j]))
+            .collect();
+        let host_f_out: Vec<u32> = (0..n)
+            .map(|j| host_f(&ft, a[j], b[j], x[j], y[j]).to_bits())
+            .collect();
         for d in &devs {
             let bufs_u = [d.upload(&a).unwrap(), d.upload(&b).unwrap()];
             let bufs_f = [d.upload(&x).unwrap(), d.upload(&y).unwrap()];
             let ou = d.alloc::<u32>(n).unwrap();
             let of = d.alloc::<f32>(n).unwrap();
-            let args: Vec<BufferArg> = vec![bufs_u[0].arg(), bufs_u[1].arg(), bufs_f[0].arg(), bufs_f[1].arg(), ou.arg(), of.arg()];
-            d.dispatch(&art, &args, Dispatch::Groups([(n / 64) as u32, 1, 1])).unwrap();
+            let args: Vec<BufferArg> = vec![
+                bufs_u[0].arg(),
+                bufs_u[1].arg(),
+                bufs_f[0].arg(),
+                bufs_f[1].arg(),
+                ou.arg(),
+                of.arg(),
+            ];
+            d.dispatch(&art, &args, Dispatch::Groups([(n / 64) as u32, 1, 1]))
+                .unwrap();
             let gu = d.read(&ou).unwrap();
             let gf: Vec<u32> = d.read(&of).unwrap().iter().map(|v| v.to_bits()).collect();
-            assert_eq!(gu, host_u_out, "integer kernel {k} on {:?}: {ut:?}", d.info().backend);
+            assert_eq!(
+                gu,
+                host_u_out,
+                "integer kernel {k} on {:?}: {ut:?}",
+                d.info().backend
+            );
             for j in 0..n {
                 let (g, h) = (f32::from_bits(gf[j]), f32::from_bits(host_f_out[j]));
                 // -0.0 and +0.0 compare equal: min/max of zeros may pick either sign.
                 let close = g == h || common::ulps(g, h) <= 8 || (g - h).abs() <= 0.125;
-                assert!(close, "float kernel {k} on {:?}, element {j}: {g} vs {h}: {ft:?}", d.info().backend);
+                assert!(
+                    close,
+                    "float kernel {k} on {:?}, element {j}: {g} vs {h}: {ft:?}",
+                    d.info().backend
+                );
             }
         }
     }

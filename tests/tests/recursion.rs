@@ -7,7 +7,14 @@
 use cohort::ir::{self, builtin, AsPlace, Buffer, Val};
 use cohort::{Group, KernelInfo, Spec};
 
-static INFO: KernelInfo = KernelInfo { name: "ping_pong", file: "src/ping.rs", line: 3, column: 1, workgroup_size: 64, group: Group::Thread };
+static INFO: KernelInfo = KernelInfo {
+    name: "ping_pong",
+    file: "src/ping.rs",
+    line: 3,
+    column: 1,
+    workgroup_size: 64,
+    group: Group::Thread,
+};
 
 struct Ping;
 struct Pong;
@@ -32,7 +39,16 @@ fn recursion_through_helpers_is_a_build_error_with_the_chain() {
     };
     let msg = err.to_string();
     assert_eq!(err.stage, "build", "{msg}");
-    assert!(msg.starts_with("src/ping.rs:3:1: kernel `ping_pong`"), "{msg}");
-    assert!(msg.contains("ping -> pong -> ping") && msg.contains("cannot recurse"), "{msg}");
-    assert!(!msg.contains("compiler bug"), "a user's recursion is not a compiler bug: {msg}");
+    assert!(
+        msg.starts_with("src/ping.rs:3:1: kernel `ping_pong`"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("ping -> pong -> ping") && msg.contains("cannot recurse"),
+        "{msg}"
+    );
+    assert!(
+        !msg.contains("compiler bug"),
+        "a user's recursion is not a compiler bug: {msg}"
+    );
 }

@@ -17,7 +17,12 @@ fn spirv_val(name: &str, words: &[u32]) {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.spv"));
     std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(words)).unwrap();
-    match Command::new("spirv-val").arg("--target-env").arg("vulkan1.1").arg(&path).output() {
+    match Command::new("spirv-val")
+        .arg("--target-env")
+        .arg("vulkan1.1")
+        .arg(&path)
+        .output()
+    {
         Ok(out) => assert!(
             out.status.success(),
             "spirv-val rejects {name}:\n{}{}",
@@ -25,17 +30,29 @@ fn spirv_val(name: &str, words: &[u32]) {
             String::from_utf8_lossy(&out.stderr)
         ),
         Err(e) => {
-            assert!(std::env::var("CI").as_deref() != Ok("true"), "spirv-val not found ({e}); install spirv-tools");
+            assert!(
+                std::env::var("CI").as_deref() != Ok("true"),
+                "spirv-val not found ({e}); install spirv-tools"
+            );
             eprintln!("skipping spirv-val for {name}: {e} (install spirv-tools)");
         }
     }
 }
 
 fn reparse_wgsl(name: &str, wgsl: &str) {
-    let module = naga::front::wgsl::parse_str(wgsl).unwrap_or_else(|e| panic!("{name}: WGSL does not re-parse: {}", e.emit_to_string(wgsl)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{name}: re-parsed WGSL does not validate: {:?}", e.into_inner()));
+    let module = naga::front::wgsl::parse_str(wgsl)
+        .unwrap_or_else(|e| panic!("{name}: WGSL does not re-parse: {}", e.emit_to_string(wgsl)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| {
+        panic!(
+            "{name}: re-parsed WGSL does not validate: {:?}",
+            e.into_inner()
+        )
+    });
 }
 
 #[test]
@@ -44,7 +61,11 @@ fn every_variant_is_locked_and_valid() {
     assert!(variants.len() >= 18);
     let mut names = std::collections::HashSet::new();
     for v in variants {
-        assert!(names.insert(v.name.clone()), "duplicate variant name {}", v.name);
+        assert!(
+            names.insert(v.name.clone()),
+            "duplicate variant name {}",
+            v.name
+        );
         let built = (v.build)(&v.spec);
         let e = cohort::emit::emit(&built).unwrap_or_else(|e| panic!("{e}"));
         reparse_wgsl(&v.name, &e.wgsl);

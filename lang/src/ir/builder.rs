@@ -30,7 +30,10 @@ pub(crate) struct FnState {
 impl FnState {
     pub fn new(name: &str) -> Self {
         FnState {
-            func: Function { name: Some(name.to_string()), ..Default::default() },
+            func: Function {
+                name: Some(name.to_string()),
+                ..Default::default()
+            },
             blocks: vec![Block::new()],
             terminated: vec![false],
             emit_start: None,
@@ -41,7 +44,10 @@ impl FnState {
         if let Some(start) = self.emit_start.take() {
             let range = self.func.expressions.range_from(start);
             if !*self.terminated.last().unwrap() {
-                self.blocks.last_mut().unwrap().push(Statement::Emit(range), Span::UNDEFINED);
+                self.blocks
+                    .last_mut()
+                    .unwrap()
+                    .push(Statement::Emit(range), Span::UNDEFINED);
             }
         }
     }
@@ -106,7 +112,10 @@ pub(crate) fn with<R>(f: impl FnOnce(&mut Ctx) -> R) -> R {
 pub(crate) fn install(ctx: Ctx) {
     CTX.with(|c| {
         let mut g = c.borrow_mut();
-        assert!(g.is_none(), "nested kernel builds on one thread are not supported");
+        assert!(
+            g.is_none(),
+            "nested kernel builds on one thread are not supported"
+        );
         *g = Some(ctx);
     })
 }
@@ -186,8 +195,10 @@ impl Ctx {
         if *f.terminated.last().unwrap() {
             return;
         }
-        let terminates =
-            matches!(s, Statement::Break | Statement::Continue | Statement::Return { .. } | Statement::Kill);
+        let terminates = matches!(
+            s,
+            Statement::Break | Statement::Continue | Statement::Return { .. } | Statement::Kill
+        );
         f.blocks.last_mut().unwrap().push(s, Span::UNDEFINED);
         if terminates {
             *f.terminated.last_mut().unwrap() = true;
@@ -209,13 +220,19 @@ impl Ctx {
     }
 
     pub fn ty(&mut self, inner: TypeInner) -> Handle<Type> {
-        self.module.types.insert(Type { name: None, inner }, Span::UNDEFINED)
+        self.module
+            .types
+            .insert(Type { name: None, inner }, Span::UNDEFINED)
     }
 
     pub fn local(&mut self, name: Option<&str>, ty: Handle<Type>) -> Handle<Expression> {
         let f = self.f();
         let lv = f.func.local_variables.append(
-            naga::LocalVariable { name: name.map(str::to_string), ty, init: None },
+            naga::LocalVariable {
+                name: name.map(str::to_string),
+                ty,
+                init: None,
+            },
             Span::UNDEFINED,
         );
         self.expr(Expression::LocalVariable(lv))

@@ -8,7 +8,7 @@
 use naga::{Block, Statement};
 
 use super::builder::with;
-use super::ops::{lt, le};
+use super::ops::{le, lt};
 use super::types::GpuType;
 use super::val::{lit, Val, Var};
 
@@ -34,11 +34,21 @@ pub fn if_(cond: Val<bool>, then: impl FnOnce(), otherwise: impl FnOnce()) {
     }
     let accept = block(then);
     let reject = block(otherwise);
-    with(|c| c.stmt(Statement::If { condition: cond.h, accept, reject }));
+    with(|c| {
+        c.stmt(Statement::If {
+            condition: cond.h,
+            accept,
+            reject,
+        })
+    });
 }
 
 /// `if c { a } else { b }` used as a value.
-pub fn if_value<T: GpuType>(cond: Val<bool>, then: impl FnOnce() -> Val<T>, otherwise: impl FnOnce() -> Val<T>) -> Val<T> {
+pub fn if_value<T: GpuType>(
+    cond: Val<bool>,
+    then: impl FnOnce() -> Val<T>,
+    otherwise: impl FnOnce() -> Val<T>,
+) -> Val<T> {
     let tmp = Var::<T>::uninit("branch_value");
     if_(cond, || tmp.set(then()), || tmp.set(otherwise()));
     tmp.get()
@@ -46,7 +56,13 @@ pub fn if_value<T: GpuType>(cond: Val<bool>, then: impl FnOnce() -> Val<T>, othe
 
 pub fn loop_(body: impl FnOnce()) {
     let body = block(body);
-    with(|c| c.stmt(Statement::Loop { body, continuing: Block::new(), break_if: None }));
+    with(|c| {
+        c.stmt(Statement::Loop {
+            body,
+            continuing: Block::new(),
+            break_if: None,
+        })
+    });
 }
 
 pub fn while_(cond: impl FnOnce() -> Val<bool>, body: impl FnOnce()) {
@@ -79,19 +95,33 @@ impl RangeInt for usize {
 
 /// `for i in start..end` (or `..=end` when `inclusive`). The increment lives in the
 /// loop's continuing block, so `continue` still advances `i`.
-pub fn for_range<T: RangeInt>(start: Val<T>, end: Val<T>, inclusive: bool, body: impl FnOnce(Val<T>))
-where
+pub fn for_range<T: RangeInt>(
+    start: Val<T>,
+    end: Val<T>,
+    inclusive: bool,
+    body: impl FnOnce(Val<T>),
+) where
     Val<T>: std::ops::Add<Val<T>, Output = Val<T>>,
 {
     let i = Var::new("i", start);
     let loop_body = block(|| {
         let cur = i.get();
-        let go = if inclusive { le(cur, end) } else { lt(cur, end) };
+        let go = if inclusive {
+            le(cur, end)
+        } else {
+            lt(cur, end)
+        };
         if_(go, || {}, break_);
         body(cur);
     });
     let continuing = block(|| i.set(i.get() + T::one()));
-    with(|c| c.stmt(Statement::Loop { body: loop_body, continuing, break_if: None }));
+    with(|c| {
+        c.stmt(Statement::Loop {
+            body: loop_body,
+            continuing,
+            break_if: None,
+        })
+    });
 }
 
 /// `for i in (start..end).rev()`. The decrement happens at the top of the body, so
@@ -161,7 +191,11 @@ pub fn discard<T>(_v: T) {}
 
 /// What an `if`/`else` produces: nothing (a statement) or a value.
 pub trait BranchValue: Sized {
-    fn branch(cond: Val<bool>, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self;
+    fn branch(
+        cond: Val<bool>,
+        then: impl FnOnce() -> Self,
+        otherwise: impl FnOnce() -> Self,
+    ) -> Self;
     /// The value of a branch that ends in `break`/`continue`/`return` (never used).
     fn diverged() -> Self;
 }
@@ -172,7 +206,11 @@ impl BranchValue for () {
     fn diverged() {}
 }
 impl<T: GpuType> BranchValue for Val<T> {
-    fn branch(cond: Val<bool>, then: impl FnOnce() -> Self, otherwise: impl FnOnce() -> Self) -> Self {
+    fn branch(
+        cond: Val<bool>,
+        then: impl FnOnce() -> Self,
+        otherwise: impl FnOnce() -> Self,
+    ) -> Self {
         if_value(cond, then, otherwise)
     }
     fn diverged() -> Self {
@@ -181,7 +219,11 @@ impl<T: GpuType> BranchValue for Val<T> {
 }
 
 /// `if c { a } else { b }`, as a statement or as a value.
-pub fn if_else<R: BranchValue>(cond: Val<bool>, then: impl FnOnce() -> R, otherwise: impl FnOnce() -> R) -> R {
+pub fn if_else<R: BranchValue>(
+    cond: Val<bool>,
+    then: impl FnOnce() -> R,
+    otherwise: impl FnOnce() -> R,
+) -> R {
     R::branch(cond, then, otherwise)
 }
 

@@ -5,7 +5,9 @@
 //! the helper and its generic arguments; the body closure runs only the first time the
 //! helper is used in a module, inside a fresh naga function.
 
-use naga::{AddressSpace, Expression, FunctionArgument, FunctionResult, Handle, Span, Statement, TypeInner};
+use naga::{
+    AddressSpace, Expression, FunctionArgument, FunctionResult, Handle, Span, Statement, TypeInner,
+};
 use std::any::TypeId;
 
 use super::builder::{with, FnState};
@@ -33,7 +35,13 @@ impl<T: GpuType> Param for Place<T> {
     fn arg_type(m: &mut naga::Module) -> Handle<naga::Type> {
         let base = T::naga_type(m);
         m.types.insert(
-            naga::Type { name: None, inner: TypeInner::Pointer { base, space: AddressSpace::Function } },
+            naga::Type {
+                name: None,
+                inner: TypeInner::Pointer {
+                    base,
+                    space: AddressSpace::Function,
+                },
+            },
             Span::UNDEFINED,
         )
     }
@@ -96,10 +104,17 @@ impl Return for () {
 }
 impl<T: GpuType> Return for Val<T> {
     fn result(m: &mut naga::Module) -> Option<FunctionResult> {
-        Some(FunctionResult { ty: T::naga_type(m), binding: None })
+        Some(FunctionResult {
+            ty: T::naga_type(m),
+            binding: None,
+        })
     }
     fn finish(self) {
-        with(|c| c.stmt(Statement::Return { value: Some(self.h) }));
+        with(|c| {
+            c.stmt(Statement::Return {
+                value: Some(self.h),
+            })
+        });
     }
     fn from_call(h: Option<Handle<Expression>>) -> Self {
         Val::from_handle(h.expect("call result"))
@@ -121,7 +136,9 @@ pub fn function<K: 'static + ?Sized, P: Params, R: Return>(
     body: impl FnOnce(P) -> R,
 ) -> R {
     let key = (TypeId::of::<K>(), name);
-    enter(key, name, || call_helper::<K, P, R>(key, name, param_names, args, body))
+    enter(key, name, || {
+        call_helper::<K, P, R>(key, name, param_names, args, body)
+    })
 }
 
 /// Records the body of helper `name`, which takes a buffer or a reference, in the caller
@@ -133,13 +150,21 @@ pub fn inlined<K: 'static + ?Sized, R: Return>(name: &'static str, body: impl Fn
 }
 
 /// Runs `build` with `key` on the call stack, unless the call recurses.
-fn enter<R: Return>(key: (TypeId, &'static str), name: &'static str, build: impl FnOnce() -> R) -> R {
+fn enter<R: Return>(
+    key: (TypeId, &'static str),
+    name: &'static str,
+    build: impl FnOnce() -> R,
+) -> R {
     // Recursion through other helpers (a helper calling itself directly is refused by
     // `#[kernel_fn]` at compile time): reported as the kernel's build error with the
     // chain of calls, and the call replaced by a zero value so that building can finish.
     let cycle = with(|c| {
         c.call_stack.iter().position(|k| *k == key).map(|at| {
-            let chain: Vec<&str> = c.call_stack[at..].iter().map(|k| k.1).chain([name]).collect();
+            let chain: Vec<&str> = c.call_stack[at..]
+                .iter()
+                .map(|k| k.1)
+                .chain([name])
+                .collect();
             c.unsupported.push(format!(
                 "helper `{name}` calls itself through {}: kernel code cannot recurse (GPUs have no \
                  call stack); write it as a loop, with a local array as the stack if it needs one",
@@ -188,8 +213,9 @@ fn call_helper<K: 'static + ?Sized, P: Params, R: Return>(
                     });
                 }
                 c.fns.push(st);
-                let handles: Vec<_> =
-                    (0..types.len()).map(|i| c.expr(Expression::FunctionArgument(i as u32))).collect();
+                let handles: Vec<_> = (0..types.len())
+                    .map(|i| c.expr(Expression::FunctionArgument(i as u32)))
+                    .collect();
                 P::from_handles(&handles)
             });
             let ret = body(fresh);
@@ -206,7 +232,11 @@ fn call_helper<K: 'static + ?Sized, P: Params, R: Return>(
     with(|c| {
         let has_result = c.module.functions[fh].result.is_some();
         let result = has_result.then(|| c.expr(Expression::CallResult(fh)));
-        c.stmt(Statement::Call { function: fh, arguments, result });
+        c.stmt(Statement::Call {
+            function: fh,
+            arguments,
+            result,
+        });
         R::from_call(result)
     })
 }
@@ -223,7 +253,9 @@ fn fn_name<K: ?Sized>(name: &str) -> String {
                 .map(|a| {
                     let a = a.trim();
                     let last = a.rsplit("::").next().unwrap_or(a);
-                    last.chars().map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' }).collect()
+                    last.chars()
+                        .map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' })
+                        .collect()
                 })
                 .collect();
             format!("{name}_{}", parts.join("_"))
@@ -243,7 +275,9 @@ fn points_outside_function(h: Handle<Expression>) -> bool {
         let mut cur = h;
         loop {
             match exprs[cur] {
-                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => cur = base,
+                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => {
+                    cur = base
+                }
                 Expression::GlobalVariable(_) => return true,
                 _ => return false,
             }

@@ -24,7 +24,13 @@ fn math<R>(fun: M, args: &[Handle<Expression>]) -> Val<R> {
 }
 
 fn select<T>(cond: Val<bool>, accept: Val<T>, reject: Val<T>) -> Val<T> {
-    Val::from_handle(with(|c| c.expr(Expression::Select { condition: cond.h, accept: accept.h, reject: reject.h })))
+    Val::from_handle(with(|c| {
+        c.expr(Expression::Select {
+            condition: cond.h,
+            accept: accept.h,
+            reject: reject.h,
+        })
+    }))
 }
 
 macro_rules! unary_math {
@@ -489,12 +495,25 @@ fn float_vec_to_int<R>(v: Handle<Expression>, kind: ScalarKind, size: VectorSize
 fn compose<T: GpuType>(parts: &[Handle<Expression>]) -> Val<T> {
     Val::from_handle(with(|c| {
         let ty = T::naga_type(&mut c.module);
-        c.expr(Expression::Compose { ty, components: parts.to_vec() })
+        c.expr(Expression::Compose {
+            ty,
+            components: parts.to_vec(),
+        })
     }))
 }
 
-fn swizzle<R>(v: Handle<Expression>, size: VectorSize, pattern: [naga::SwizzleComponent; 4]) -> Val<R> {
-    Val::from_handle(with(|c| c.expr(Expression::Swizzle { size, vector: v, pattern })))
+fn swizzle<R>(
+    v: Handle<Expression>,
+    size: VectorSize,
+    pattern: [naga::SwizzleComponent; 4],
+) -> Val<R> {
+    Val::from_handle(with(|c| {
+        c.expr(Expression::Swizzle {
+            size,
+            vector: v,
+            pattern,
+        })
+    }))
 }
 
 /// glam's `min`/`max` closures (`if a < b { a } else { b }`): with a NaN operand they give
@@ -688,7 +707,13 @@ impl Val<UVec3> {
 }
 impl Val<IVec3> {
     pub fn as_vec3(self) -> Val<Vec3> {
-        Val::from_handle(with(|c| c.expr(Expression::As { expr: self.h, kind: ScalarKind::Float, convert: Some(4) })))
+        Val::from_handle(with(|c| {
+            c.expr(Expression::As {
+                expr: self.h,
+                kind: ScalarKind::Float,
+                convert: Some(4),
+            })
+        }))
     }
 }
 

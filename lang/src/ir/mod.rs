@@ -12,9 +12,20 @@ pub mod ops;
 pub mod types;
 pub mod val;
 
-pub use control::{diverged, if_else, BranchValue, and, break_, continue_, discard, for_range, for_range_rev, if_, if_value, loop_, or, return_, return_value, while_};
+pub use control::{
+    and, break_, continue_, discard, diverged, for_range, for_range_rev, if_, if_else, if_value,
+    loop_, or, return_, return_value, while_, BranchValue,
+};
 pub use function::{function, inlined};
-pub use kernel::{build_kernel, builtin, place, Buffer, BuiltKernel, Uniform, Workgroup, LENGTHS_BINDING};
+pub use kernel::{
+    build_kernel, builtin, place, Buffer, BuiltKernel, Uniform, Workgroup, LENGTHS_BINDING,
+};
 pub use ops::{cast, eq, ge, gt, le, lt, ne};
-pub use types::{assert_uniform, storage_element_ok, struct_type, ConstValue, GpuType, HostRepr, MemberDesc, ScalarType};
-pub use val::{array, array_repeat, compose, field, field_init, index, konst, lit, name, place_field, place_index, zero, AsPlace, AutoDeref, FieldInit, ToVal, Place, RtArray, Val, Var};
+pub use types::{
+    assert_uniform, storage_element_ok, struct_type, ConstValue, GpuType, HostRepr, MemberDesc,
+    ScalarType,
+};
+pub use val::{
+    array, array_repeat, compose, field, field_init, index, konst, lit, name, place_field,
+    place_index, zero, AsPlace, AutoDeref, FieldInit, Place, RtArray, ToVal, Val, Var,
+};

@@ -42,7 +42,11 @@ pub(crate) fn binary<R>(op: B, l: naga::Handle<Expression>, r: naga::Handle<Expr
                 return guarded_divide(c, op, l, r, zero, one, size);
             }
         }
-        c.expr(Expression::Binary { op, left: l, right: r })
+        c.expr(Expression::Binary {
+            op,
+            left: l,
+            right: r,
+        })
     }))
 }
 
@@ -332,7 +336,9 @@ eq_impl!(true, false; UVec2, UVec3, UVec4, IVec2, IVec3, IVec4);
 eq_impl!(true, true; Vec2, Vec3, Vec4);
 
 fn relational(fun: naga::RelationalFunction, v: naga::Handle<Expression>) -> Val<bool> {
-    Val::from_handle(with(|c| c.expr(Expression::Relational { fun, argument: v })))
+    Val::from_handle(with(|c| {
+        c.expr(Expression::Relational { fun, argument: v })
+    }))
 }
 
 pub fn eq<T: Equatable>(a: Val<T>, b: Val<T>) -> Val<bool> {
@@ -476,5 +482,11 @@ pub fn cast<T, S: CastTo<T>>(v: Val<S>) -> Val<T> {
 }
 
 pub(crate) fn bitcast<T>(v: naga::Handle<Expression>, kind: ScalarKind) -> Val<T> {
-    Val::from_handle(with(|c| c.expr(Expression::As { expr: v, kind, convert: None })))
+    Val::from_handle(with(|c| {
+        c.expr(Expression::As {
+            expr: v,
+            kind,
+            convert: None,
+        })
+    }))
 }

@@ -69,7 +69,13 @@ pub(crate) fn literal_expr(l: naga::Literal) -> Handle<naga::Expression> {
 }
 
 fn scalar_ty(m: &mut Module, s: Scalar) -> Handle<Type> {
-    m.types.insert(Type { name: None, inner: TypeInner::Scalar(s) }, Span::UNDEFINED)
+    m.types.insert(
+        Type {
+            name: None,
+            inner: TypeInner::Scalar(s),
+        },
+        Span::UNDEFINED,
+    )
 }
 
 macro_rules! scalar {
@@ -106,7 +112,9 @@ scalar!(bool, Scalar::BOOL, |v: bool| naga::Literal::Bool(v), false);
 scalar!(
     usize,
     Scalar::U32,
-    |v: usize| naga::Literal::U32(u32::try_from(v).expect("usize constant does not fit in 32 bits")),
+    |v: usize| naga::Literal::U32(
+        u32::try_from(v).expect("usize constant does not fit in 32 bits")
+    ),
     false
 );
 
@@ -185,7 +193,13 @@ macro_rules! matrix {
     };
 }
 matrix!(Mat3, VectorSize::Tri, 3, Vec3, [x_axis, y_axis, z_axis]);
-matrix!(Mat4, VectorSize::Quad, 4, Vec4, [x_axis, y_axis, z_axis, w_axis]);
+matrix!(
+    Mat4,
+    VectorSize::Quad,
+    4,
+    Vec4,
+    [x_axis, y_axis, z_axis, w_axis]
+);
 
 const fn round_up(x: usize, a: usize) -> usize {
     x.div_ceil(a) * a
@@ -195,19 +209,25 @@ unsafe impl<T: GpuType, const N: usize> GpuType for [T; N] {
     fn naga_type(m: &mut Module) -> Handle<Type> {
         let base = T::naga_type(m);
         let size = ArraySize::Constant(
-            std::num::NonZeroU32::new(N as u32).expect("zero-length arrays are not supported in kernels"),
+            std::num::NonZeroU32::new(N as u32)
+                .expect("zero-length arrays are not supported in kernels"),
         );
         m.types.insert(
             Type {
                 name: None,
-                inner: TypeInner::Array { base, size, stride: round_up(T::GPU_SIZE, T::GPU_ALIGN) as u32 },
+                inner: TypeInner::Array {
+                    base,
+                    size,
+                    stride: round_up(T::GPU_SIZE, T::GPU_ALIGN) as u32,
+                },
             },
             Span::UNDEFINED,
         )
     }
     const GPU_ALIGN: usize = T::GPU_ALIGN;
     const GPU_SIZE: usize = round_up(T::GPU_SIZE, T::GPU_ALIGN) * N;
-    const HOST_SHAREABLE: bool = T::HOST_SHAREABLE && std::mem::size_of::<T>() == round_up(T::GPU_SIZE, T::GPU_ALIGN);
+    const HOST_SHAREABLE: bool =
+        T::HOST_SHAREABLE && std::mem::size_of::<T>() == round_up(T::GPU_SIZE, T::GPU_ALIGN);
     const UNIFORM_PROBLEM: Option<&'static str> = if round_up(T::GPU_SIZE, T::GPU_ALIGN) % 16 != 0 {
         Some("an array whose elements are not 16 bytes apart cannot be in a uniform (WGSL's uniform layout needs a 16-byte array stride): use an array of Vec4 / UVec4 / IVec4, or pass the data in a storage buffer (&[T])")
     } else {
@@ -229,7 +249,10 @@ impl<T: ConstValue, const N: usize> ConstValue for [T; N] {
         let comps: Vec<_> = self.iter().map(|c| c.build()).collect();
         crate::ir::builder::with(|c| {
             let ty = <[T; N] as GpuType>::naga_type(&mut c.module);
-            c.expr(naga::Expression::Compose { ty, components: comps })
+            c.expr(naga::Expression::Compose {
+                ty,
+                components: comps,
+            })
         })
     }
 }
@@ -238,7 +261,13 @@ macro_rules! atomic {
     ($t:ty, $s:expr) => {
         unsafe impl GpuType for $t {
             fn naga_type(m: &mut Module) -> Handle<Type> {
-                m.types.insert(Type { name: None, inner: TypeInner::Atomic($s) }, Span::UNDEFINED)
+                m.types.insert(
+                    Type {
+                        name: None,
+                        inner: TypeInner::Atomic($s),
+                    },
+                    Span::UNDEFINED,
+                )
             }
             const GPU_ALIGN: usize = 4;
             const GPU_SIZE: usize = 4;
@@ -298,7 +327,13 @@ pub fn struct_type(
         .collect();
     let span = round_up(host_size, gpu_align) as u32;
     let h = m.types.insert(
-        Type { name: Some(name.to_string()), inner: TypeInner::Struct { members: naga_members, span } },
+        Type {
+            name: Some(name.to_string()),
+            inner: TypeInner::Struct {
+                members: naga_members,
+                span,
+            },
+        },
         Span::UNDEFINED,
     );
     if host_shareable {

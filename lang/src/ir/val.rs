@@ -92,7 +92,10 @@ impl<T> Copy for Place<T> {}
 
 impl<T> Place<T> {
     pub fn from_handle(ptr: Handle<Expression>) -> Self {
-        Place { ptr, _t: PhantomData }
+        Place {
+            ptr,
+            _t: PhantomData,
+        }
     }
     pub fn handle(self) -> Handle<Expression> {
         self.ptr
@@ -106,7 +109,12 @@ impl<T: GpuType> Place<T> {
         Val::from_handle(with(|c| c.expr(Expression::Load { pointer: self.ptr })))
     }
     pub fn set(self, v: Val<T>) {
-        with(|c| c.stmt(naga::Statement::Store { pointer: self.ptr, value: v.h }))
+        with(|c| {
+            c.stmt(naga::Statement::Store {
+                pointer: self.ptr,
+                value: v.h,
+            })
+        })
     }
 }
 
@@ -128,7 +136,10 @@ impl<T: GpuType> Var<T> {
             let ty = T::naga_type(&mut c.module);
             c.local(Some(name), ty)
         });
-        Var { ptr, _t: PhantomData }
+        Var {
+            ptr,
+            _t: PhantomData,
+        }
     }
     pub fn new(name: &str, init: Val<T>) -> Var<T> {
         let v = Var::uninit(name);
@@ -187,13 +198,17 @@ fn member_index<S: GpuType, F>(proj: impl FnOnce(&S) -> &F) -> u32 {
 /// exists and gives its type; the member index is found from the field's offset.
 pub fn field<S: GpuType, F: GpuType>(v: Val<S>, proj: impl FnOnce(&S) -> &F) -> Val<F> {
     let index = member_index::<S, F>(proj);
-    Val::from_handle(with(|c| c.expr(Expression::AccessIndex { base: v.h, index })))
+    Val::from_handle(with(|c| {
+        c.expr(Expression::AccessIndex { base: v.h, index })
+    }))
 }
 
 /// `p.f` on a place.
 pub fn place_field<S: GpuType, F: GpuType>(p: Place<S>, proj: impl FnOnce(&S) -> &F) -> Place<F> {
     let index = member_index::<S, F>(proj);
-    Place::from_handle(with(|c| c.expr(Expression::AccessIndex { base: p.ptr, index })))
+    Place::from_handle(with(|c| {
+        c.expr(Expression::AccessIndex { base: p.ptr, index })
+    }))
 }
 
 /// Integer types that can index arrays.
@@ -221,18 +236,31 @@ indexable_vec!(glam::Vec2 => f32, glam::Vec3 => f32, glam::Vec4 => f32, glam::UV
     glam::Mat3 => glam::Vec3, glam::Mat4 => glam::Vec4);
 
 pub fn index<A: Indexable + GpuType, I: IndexInt>(v: Val<A>, i: Val<I>) -> Val<A::Elem> {
-    Val::from_handle(with(|c| c.expr(Expression::Access { base: v.h, index: i.h })))
+    Val::from_handle(with(|c| {
+        c.expr(Expression::Access {
+            base: v.h,
+            index: i.h,
+        })
+    }))
 }
 
 pub fn place_index<A: Indexable, I: IndexInt>(p: Place<A>, i: Val<I>) -> Place<A::Elem> {
-    Place::from_handle(with(|c| c.expr(Expression::Access { base: p.ptr, index: i.h })))
+    Place::from_handle(with(|c| {
+        c.expr(Expression::Access {
+            base: p.ptr,
+            index: i.h,
+        })
+    }))
 }
 
 /// `[a, b, c]`
 pub fn array<T: GpuType, const N: usize>(items: [Val<T>; N]) -> Val<[T; N]> {
     Val::from_handle(with(|c| {
         let ty = <[T; N] as GpuType>::naga_type(&mut c.module);
-        c.expr(Expression::Compose { ty, components: items.iter().map(|v| v.h).collect() })
+        c.expr(Expression::Compose {
+            ty,
+            components: items.iter().map(|v| v.h).collect(),
+        })
     }))
 }
 
@@ -247,7 +275,10 @@ pub struct FieldInit {
     h: Handle<Expression>,
 }
 pub fn field_init<S: GpuType, F: GpuType>(proj: impl FnOnce(&S) -> &F, v: Val<F>) -> FieldInit {
-    FieldInit { index: member_index::<S, F>(proj), h: v.h }
+    FieldInit {
+        index: member_index::<S, F>(proj),
+        h: v.h,
+    }
 }
 
 /// `S { a: .., b: .. }`: rustc has already checked that every field is given once.
@@ -255,7 +286,10 @@ pub fn compose<S: GpuType>(mut fields: Vec<FieldInit>) -> Val<S> {
     fields.sort_by_key(|f| f.index);
     Val::from_handle(with(|c| {
         let ty = S::naga_type(&mut c.module);
-        c.expr(Expression::Compose { ty, components: fields.iter().map(|f| f.h).collect() })
+        c.expr(Expression::Compose {
+            ty,
+            components: fields.iter().map(|f| f.h).collect(),
+        })
     }))
 }
 

@@ -30,7 +30,11 @@ pub(super) fn build(tris: &Triangles) -> Result<GpuBvh, BvhError> {
 
 /// [`build`] with another leaf collapse: at most `max_leaf` (1..=8) triangles per leaf, SAH
 /// traversal cost `traversal_cost` (relative to one triangle test; higher gives larger leaves).
-pub(super) fn build_with(tris: &Triangles, max_leaf: u32, traversal_cost: f32) -> Result<GpuBvh, BvhError> {
+pub(super) fn build_with(
+    tris: &Triangles,
+    max_leaf: u32,
+    traversal_cost: f32,
+) -> Result<GpuBvh, BvhError> {
     let max_leaf = max_leaf.clamp(1, MAX_LEAF_TRIANGLES);
     let n = tris.len();
     if n == 0 {

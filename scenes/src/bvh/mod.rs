@@ -43,15 +43,15 @@
 //! the cracks along shared edges that the test exists to close.
 
 mod build;
-mod traverse;
 pub mod compressed;
+mod traverse;
 pub mod wide;
 
 use glam::Vec3;
 
 pub use build::BvhError;
-pub use traverse::{brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, Hit};
 pub use compressed::{GpuCwBvh, GpuCwNode};
+pub use traverse::{brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, Hit};
 pub use wide::{closest_hit8, GpuBvh8, GpuWideNode, WideBvhError};
 
 #[repr(C)]
@@ -125,7 +125,11 @@ impl GpuBvh {
     /// [`GpuBvh::build`] with another SAH leaf collapse: at most `max_leaf` (1..=8) triangles
     /// per leaf, traversal cost `traversal_cost` relative to a triangle test (the default build
     /// uses 8 and 3).
-    pub fn build_with_leaves(scene: &crate::Scene, max_leaf: u32, traversal_cost: f32) -> Result<GpuBvh, BvhError> {
+    pub fn build_with_leaves(
+        scene: &crate::Scene,
+        max_leaf: u32,
+        traversal_cost: f32,
+    ) -> Result<GpuBvh, BvhError> {
         build::build_with(&scene.triangles, max_leaf, traversal_cost)
     }
 

@@ -116,7 +116,14 @@ pub fn intersect_triangle(
 const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Entry distance of the ray into box [lo, hi] within (tmin, tmax), or None.
-pub(super) fn slab(origin: Vec3, inv: Vec3, lo: [f32; 3], hi: [f32; 3], tmin: f32, tmax: f32) -> Option<f32> {
+pub(super) fn slab(
+    origin: Vec3,
+    inv: Vec3,
+    lo: [f32; 3],
+    hi: [f32; 3],
+    tmin: f32,
+    tmax: f32,
+) -> Option<f32> {
     let mut near = tmin;
     let mut far = tmax;
     for k in 0..3 {
@@ -131,7 +138,13 @@ pub(super) fn slab(origin: Vec3, inv: Vec3, lo: [f32; 3], hi: [f32; 3], tmin: f3
 
 /// Closest hit among the triangles of leaf reference `r`, with `tmin < t < tmax` (the first of
 /// equal distances in leaf order).
-pub(super) fn leaf_closest(bvh: &GpuBvh, shear: &Shear, r: u32, tmin: f32, tmax: f32) -> Option<Hit> {
+pub(super) fn leaf_closest(
+    bvh: &GpuBvh,
+    shear: &Shear,
+    r: u32,
+    tmin: f32,
+    tmax: f32,
+) -> Option<Hit> {
     let (first, count) = decode_leaf(r);
     let mut best = None;
     let mut best_t = tmax;

@@ -131,8 +131,16 @@ impl GpuBvh8 {
     fn children2(bvh: &GpuBvh, i: u32) -> [Child; 2] {
         let n = &bvh.nodes[i as usize];
         [
-            Child { r: n.left, lo: n.lmin.into(), hi: n.lmax.into() },
-            Child { r: n.right, lo: n.rmin.into(), hi: n.rmax.into() },
+            Child {
+                r: n.left,
+                lo: n.lmin.into(),
+                hi: n.lmax.into(),
+            },
+            Child {
+                r: n.right,
+                lo: n.rmin.into(),
+                hi: n.rmax.into(),
+            },
         ]
     }
 
@@ -192,7 +200,9 @@ impl GpuBvh8 {
         }
         let mut meta = [0u32; 2];
         for oct in 0..8u32 {
-            let m = (0..8u32).filter(|s| leaf_slots & (1 << s) != 0).fold(0u32, |m, s| m | 1 << (s ^ oct));
+            let m = (0..8u32)
+                .filter(|s| leaf_slots & (1 << s) != 0)
+                .fold(0u32, |m, s| m | 1 << (s ^ oct));
             meta[oct as usize / 4] |= m << (8 * (oct % 4));
         }
         self.nodes[index as usize].meta = [meta[0], meta[1], 0, 0];
@@ -213,7 +223,10 @@ fn slot_dir(s: usize) -> Vec3 {
 /// whose child centroid lies furthest back along the slot's octant direction first.
 fn assign_slots(kids: &[Child]) -> [Option<usize>; WIDTH] {
     let centroid = |c: &Child| 0.5 * (c.lo + c.hi);
-    let (lo, hi) = kids.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), c| (lo.min(c.lo), hi.max(c.hi)));
+    let (lo, hi) = kids.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), c| (lo.min(c.lo), hi.max(c.hi)),
+    );
     let pc = 0.5 * (lo + hi);
     let mut pairs: Vec<(f32, usize, usize)> = Vec::with_capacity(kids.len() * WIDTH);
     for (k, c) in kids.iter().enumerate() {
@@ -241,7 +254,14 @@ pub fn octant(dir: Vec3) -> u32 {
 /// Closest hit through the 8-wide BVH (host reference of the GPU kernel's order: leaves of a node
 /// first, then the nearest-in-octant-order interior child, the others on a stack), with
 /// `tmin < t < tmax`. `bvh` provides the triangles.
-pub fn closest_hit8(wide: &GpuBvh8, bvh: &GpuBvh, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<super::Hit> {
+pub fn closest_hit8(
+    wide: &GpuBvh8,
+    bvh: &GpuBvh,
+    origin: Vec3,
+    dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Option<super::Hit> {
     if wide.nodes.is_empty() {
         return None;
     }
@@ -270,7 +290,8 @@ pub fn closest_hit8(wide: &GpuBvh8, bvh: &GpuBvh, origin: Vec3, dir: Vec3, tmin:
         for p in 0..WIDTH {
             let s = p ^ oct as usize;
             if hits[s] && is_leaf(child(s)) {
-                if let Some(h) = super::traverse::leaf_closest(bvh, &shear, child(s), tmin, best_t) {
+                if let Some(h) = super::traverse::leaf_closest(bvh, &shear, child(s), tmin, best_t)
+                {
                     best_t = h.t;
                     best = Some(h);
                 }
@@ -339,13 +360,25 @@ mod tests {
                         }
                     }
                 }
-                assert!(seen.iter().all(|&s| s == 1), "{name}: a triangle is not in exactly one leaf");
+                assert!(
+                    seen.iter().all(|&s| s == 1),
+                    "{name}: a triangle is not in exactly one leaf"
+                );
                 let lo = bvh.bounds_min;
                 let hi = bvh.bounds_max;
                 let mut rng = Rng::new(7);
                 for k in 0..2000 {
-                    let o = if k % 2 == 0 { scene.camera.origin() } else { lo + (hi - lo) * Vec3::new(rng.f32(), rng.f32(), rng.f32()) };
-                    let d = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize_or(Vec3::Y);
+                    let o = if k % 2 == 0 {
+                        scene.camera.origin()
+                    } else {
+                        lo + (hi - lo) * Vec3::new(rng.f32(), rng.f32(), rng.f32())
+                    };
+                    let d = Vec3::new(
+                        rng.range(-1.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                    )
+                    .normalize_or(Vec3::Y);
                     let a = super::super::closest_hit(&bvh, o, d, 0.0, 3.0e38);
                     let b = closest_hit8(&wide, &bvh, o, d, 0.0, 3.0e38);
                     let same = match (a, b) {

@@ -3,7 +3,12 @@
 use cohort::prelude::*;
 
 #[kernel(workgroup = 64)]
-pub fn collatz(#[builtin(global_index)] i: u32, seeds: &[u32], steps: &mut [u32], odd_digits: &mut [u32]) {
+pub fn collatz(
+    #[builtin(global_index)] i: u32,
+    seeds: &[u32],
+    steps: &mut [u32],
+    odd_digits: &mut [u32],
+) {
     let i = i as usize;
     if i >= seeds.len() {
         return;

@@ -26,7 +26,11 @@ impl Curve for Tent {
     const SCALE: f32 = 0.5;
     fn eval(x: f32) -> f32 {
         let f = x.fract();
-        if f < 0.5 { f * 2.0 } else { 2.0 - f * 2.0 }
+        if f < 0.5 {
+            f * 2.0
+        } else {
+            2.0 - f * 2.0
+        }
     }
 }
 

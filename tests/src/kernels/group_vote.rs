@@ -12,7 +12,12 @@ pub struct VoteParams {
 }
 
 #[kernel(workgroup = 256, group = Warp)]
-pub fn group_vote(#[builtin(global_index)] gi: u32, p: &VoteParams, values: &[u32], out: &mut [u32]) {
+pub fn group_vote(
+    #[builtin(global_index)] gi: u32,
+    p: &VoteParams,
+    values: &[u32],
+    out: &mut [u32],
+) {
     let i = gi as usize;
     let mut bits = 0u32;
     for round in 0..3u32 {

@@ -3,7 +3,12 @@
 use cohort::prelude::*;
 
 #[kernel(workgroup = 128)]
-pub fn histogram(#[builtin(global_index)] gi: u32, values: &[u32], bins: &[AtomicU32], stats: &[AtomicU32]) {
+pub fn histogram(
+    #[builtin(global_index)] gi: u32,
+    values: &[u32],
+    bins: &[AtomicU32],
+    stats: &[AtomicU32],
+) {
     let i = gi as usize;
     if i >= values.len() {
         return;

@@ -40,18 +40,33 @@ pub fn hit_sphere(ray: Ray, s: Sphere) -> f32 {
     } else {
         let root = disc.sqrt();
         let near = -b - root;
-        if near > ray.tmin { near } else { -b + root }
+        if near > ray.tmin {
+            near
+        } else {
+            -b + root
+        }
     }
 }
 
 #[kernel(workgroup = 64)]
-pub fn trace_spheres(#[builtin(global_index)] i: u32, rays: &[Ray], spheres: &[Sphere], hits: &mut [Hit]) {
+pub fn trace_spheres(
+    #[builtin(global_index)] i: u32,
+    rays: &[Ray],
+    spheres: &[Sphere],
+    hits: &mut [Hit],
+) {
     let i = i as usize;
     if i >= rays.len() {
         return;
     }
     let ray = rays[i];
-    let mut best = Hit { normal: Vec3::ZERO, t: ray.tmax, sphere: 0, hit: 0, pad: [0, 0] };
+    let mut best = Hit {
+        normal: Vec3::ZERO,
+        t: ray.tmax,
+        sphere: 0,
+        hit: 0,
+        pad: [0, 0],
+    };
     for s in 0..spheres.len() {
         let t = hit_sphere(ray, spheres[s]);
         if t > ray.tmin && t < best.t {

@@ -29,6 +29,11 @@ pub fn subgroup_scan(
     if i < flags.len() {
         exclusive[i] = ex;
         inclusive[i] = inc;
-        votes[i] = below.count_ones() + (first << 8) + (any << 16) + (all << 17) + (total << 20) + (size << 26);
+        votes[i] = below.count_ones()
+            + (first << 8)
+            + (any << 16)
+            + (all << 17)
+            + (total << 20)
+            + (size << 26);
     }
 }

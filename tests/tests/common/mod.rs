@@ -7,7 +7,10 @@ use cohort::runtime::{BackendKind, Device};
 /// Every backend with an adapter here (both, on lavapipe or a GPU). With `CI=true` a
 /// missing adapter fails the test instead of skipping it.
 pub fn devices() -> Vec<Device> {
-    [BackendKind::Wgpu, BackendKind::Vulkan].into_iter().filter_map(Device::for_tests).collect()
+    [BackendKind::Wgpu, BackendKind::Vulkan]
+        .into_iter()
+        .filter_map(Device::for_tests)
+        .collect()
 }
 
 /// xorshift32: reproducible inputs without a dependency.
@@ -37,9 +40,15 @@ pub fn ulps(a: f32, b: f32) -> u32 {
     }
     let key = |x: f32| {
         let b = x.to_bits() as i32;
-        if b < 0 { i32::MIN - b } else { b }
+        if b < 0 {
+            i32::MIN - b
+        } else {
+            b
+        }
     };
-    (key(a) as i64 - key(b) as i64).unsigned_abs().min(u32::MAX as u64) as u32
+    (key(a) as i64 - key(b) as i64)
+        .unsigned_abs()
+        .min(u32::MAX as u64) as u32
 }
 
 /// Asserts that two float slices agree within `max_ulps` (or `abs` absolute error,
