@@ -52,7 +52,7 @@ pub fn list() -> Result<(), String> {
                 for (i, d) in devices.iter().enumerate() {
                     let info = d.info();
                     println!(
-                        "{:<7} {i}  {} ({}){}",
+                        "{:<7} {i}  {} ({}){}{}",
                         kind.name(),
                         info.adapter_name,
                         info.driver,
@@ -61,6 +61,11 @@ pub fn list() -> Result<(), String> {
                             (true, false) => ", f32 subnormals kept (NaN may be folded)",
                             (false, true) => ", f32 NaN kept (subnormals flushed to zero)",
                             (false, false) => "",
+                        },
+                        if info.uniforms_as_storage {
+                            ", uniforms in storage buffers"
+                        } else {
+                            ""
                         }
                     );
                 }

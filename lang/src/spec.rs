@@ -69,6 +69,10 @@ pub struct Spec {
     pub warp_via_subgroup: bool,
     /// Ask the driver for subgroups of exactly this size (Vulkan subgroup size control).
     pub required_subgroup_size: Option<u32>,
+    /// Declare uniform parameters (`&T`) as read-only storage buffers: the same values and
+    /// layout, bound as storage. For drivers where a uniform buffer costs more than its
+    /// reads ([`DeviceInfo::uniforms_as_storage`]).
+    pub uniforms_as_storage: bool,
 }
 
 pub const WARP: u32 = 32;
@@ -80,15 +84,23 @@ impl Spec {
             Group::Block(n) => n,
             _ => info.workgroup_size,
         };
-        Spec { group, workgroup_size, warp_via_subgroup: false, required_subgroup_size: None }
+        Spec {
+            group,
+            workgroup_size,
+            warp_via_subgroup: false,
+            required_subgroup_size: None,
+            uniforms_as_storage: false,
+        }
     }
 
     /// The best specialisation for `device`: warps use subgroup broadcasts where the
     /// device's subgroups are (or can be made) exactly 32 wide.
     pub fn for_device(info: &KernelInfo, device: &DeviceInfo, group: Group) -> Spec {
         let mut spec = Spec::portable(info, group);
+        spec.uniforms_as_storage = device.uniforms_as_storage;
         if group == Group::Warp {
-            if device.subgroup_size == WARP && device.subgroup_size_min == device.subgroup_size_max {
+            if device.subgroup_size == WARP && device.subgroup_size_min == device.subgroup_size_max
+            {
                 spec.warp_via_subgroup = true;
             } else if device.supports_required_subgroup_size
                 && (device.subgroup_size_min..=device.subgroup_size_max).contains(&WARP)
@@ -106,10 +118,17 @@ impl Spec {
     pub fn suffix(&self) -> String {
         let mut s = self.group.label();
         if self.group == Group::Warp {
-            s.push_str(if self.warp_via_subgroup { "_subgroup" } else { "_shared" });
+            s.push_str(if self.warp_via_subgroup {
+                "_subgroup"
+            } else {
+                "_shared"
+            });
         }
         if !matches!(self.group, Group::Block(_)) {
             s.push_str(&format!("_wg{}", self.workgroup_size));
+        }
+        if self.uniforms_as_storage {
+            s.push_str("_ustorage");
         }
         s
     }

@@ -39,6 +39,24 @@ pub struct DeviceInfo {
     /// (not folded away, e.g. a NaN-propagating select turned into `fmax`): the Vulkan
     /// backend on devices with `shaderSignedZeroInfNanPreserveFloat32`.
     pub f32_nan_inf: bool,
+    /// Whether kernels specialised for this device read their uniform parameters from
+    /// read-only storage buffers (`Spec::uniforms_as_storage`). The software driver
+    /// (Mesa's llvmpipe, 22.x) specialises a kernel on the values of a bound uniform
+    /// buffer whose words steer its branches, anew at every bind, and keeps each copy
+    /// until the pipeline is destroyed: the path tracer's `extend` grew the process by
+    /// about 0.5 MB per dispatch (issue 15, `render/tests/memory.rs`).
+    pub uniforms_as_storage: bool,
+}
+
+/// `DeviceInfo::uniforms_as_storage` for a device whose driver would have it `software`:
+/// `COHORT_UNIFORMS_AS_STORAGE=0` or `=1` overrides the choice (for comparisons, and for
+/// drivers this default does not know).
+pub(crate) fn uniforms_as_storage(software: bool) -> bool {
+    match std::env::var("COHORT_UNIFORMS_AS_STORAGE").as_deref() {
+        Ok("0") => false,
+        Ok("1") => true,
+        _ => software,
+    }
 }
 
 /// Device limits the host-side checks need; filled by each backend from its own API.

@@ -163,10 +163,15 @@ impl VkDevice {
         let cache_file = crate::disk_cache::file_for(&desc.info.adapter_name);
         let initial = crate::disk_cache::load(&cache_file);
         let create = |data: &[u8]| unsafe {
-            shared.device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default().initial_data(data), None)
+            shared.device.create_pipeline_cache(
+                &vk::PipelineCacheCreateInfo::default().initial_data(data),
+                None,
+            )
         };
         // A blob the driver rejects outright is dropped rather than failing the device.
-        let vk_cache = create(&initial).or_else(|_| create(&[])).vk("vkCreatePipelineCache")?;
+        let vk_cache = create(&initial)
+            .or_else(|_| create(&[]))
+            .vk("vkCreatePipelineCache")?;
         Ok(VkDevice {
             id: NEXT_DEVICE_ID.fetch_add(1, Ordering::Relaxed),
             info: desc.info,
@@ -315,6 +320,7 @@ impl VkDevice {
     fn run(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
         let device = &self.shared.device;
         let s = lock(&self.submitter);
+        let mut allocated = None;
         let result = (|| unsafe {
             let cb = device
                 .allocate_command_buffers(
@@ -324,6 +330,7 @@ impl VkDevice {
                         .command_buffer_count(1),
                 )
                 .vk("vkAllocateCommandBuffers")?[0];
+            allocated = Some(cb);
             device
                 .begin_command_buffer(
                     cb,
@@ -362,6 +369,12 @@ impl VkDevice {
         })();
         unsafe {
             let _ = device.reset_fences(&[s.fence]);
+            // Resetting the pool only resets its command buffers; without freeing, every
+            // call would leave one more allocated in the pool (issue 15: memory grew by
+            // about 8 KB per upload, write and read on the software driver).
+            if let Some(cb) = allocated {
+                device.free_command_buffers(s.pool, &[cb]);
+            }
             let _ = device.reset_command_pool(s.pool, vk::CommandPoolResetFlags::empty());
         }
         result
@@ -493,10 +506,7 @@ impl VkDevice {
         let mut layout = vk::PipelineLayout::null();
         let result = (|| unsafe {
             module = device
-                .create_shader_module(
-                    &vk::ShaderModuleCreateInfo::default().code(&code),
-                    None,
-                )
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
                 .map_err(|e| fail(format!("vkCreateShaderModule failed: {e}")))?;
             set_layout = device
                 .create_descriptor_set_layout(
@@ -580,7 +590,9 @@ impl VkDevice {
 
     /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
     pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.pipelines.get_or_create(kernel, || self.create_pipeline(kernel)).map(|_| ())
+        self.pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))
+            .map(|_| ())
     }
 
     /// The buffer behind `raw`, for a read-back recorded in a batch.

@@ -523,6 +523,7 @@ fn open_device(
         f32_nan_inf: is_12
             && !software
             && float_controls.shader_signed_zero_inf_nan_preserve_float32 == vk::TRUE,
+        uniforms_as_storage: crate::device::uniforms_as_storage(software),
     };
     let limits = Limits {
         max_workgroups: l.max_compute_work_group_count,

@@ -168,6 +168,11 @@ impl WgpuDevice {
             // defaults apply (lavapipe keeps IEEE behaviour; NVIDIA flushes subnormals).
             f32_subnormals: false,
             f32_nan_inf: false,
+            // The software driver under wgpu, as under the Vulkan backend.
+            uniforms_as_storage: crate::device::uniforms_as_storage(
+                adapter_info.device_type == wgpu::DeviceType::Cpu
+                    && adapter_info.driver.to_ascii_lowercase().contains("llvmpipe"),
+            ),
         };
         let limits = Limits {
             max_workgroups: [l.max_compute_workgroups_per_dimension; 3],
@@ -437,7 +442,9 @@ impl WgpuDevice {
 
     /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
     pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.pipelines.get_or_create(kernel, || self.create_pipeline(kernel)).map(|_| ())
+        self.pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))
+            .map(|_| ())
     }
 
     /// The buffer behind `raw`, for a read-back recorded in a batch.

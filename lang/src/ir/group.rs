@@ -18,7 +18,6 @@ use super::ops::eq;
 use super::types::GpuType;
 use super::val::{lit, Place, Val, Var};
 use crate::spec::{Group, WARP};
-use cohort_runtime::BindingKind;
 
 fn barrier() {
     with(|c| c.stmt(Statement::ControlBarrier(Barrier::WORK_GROUP)));
@@ -27,7 +26,10 @@ fn barrier() {
 fn is_scalar_or_vector<T: GpuType>() -> bool {
     with(|c| {
         let ty = T::naga_type(&mut c.module);
-        matches!(c.module.types[ty].inner, TypeInner::Scalar(_) | TypeInner::Vector { .. })
+        matches!(
+            c.module.types[ty].inner,
+            TypeInner::Scalar(_) | TypeInner::Vector { .. }
+        )
     })
 }
 
@@ -45,13 +47,19 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
         Group::Grid => {
             let name = format!("group_share_{site}");
             let ty = with(|c| T::naga_type(&mut c.module));
-            let g = add_global(&name, AddressSpace::Uniform, ty, Some(BindingKind::Uniform));
+            let (space, kind) = super::kernel::uniform_space();
+            let g = add_global(&name, space, ty, Some(kind));
             let p = Place::<T>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
             p.get()
         }
         Group::Block(_) => {
             let ty = with(|c| T::naga_type(&mut c.module));
-            let g = add_global(&format!("group_share_{site}"), AddressSpace::WorkGroup, ty, None);
+            let g = add_global(
+                &format!("group_share_{site}"),
+                AddressSpace::WorkGroup,
+                ty,
+                None,
+            );
             let p = Place::<T>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
             let wg = Val::<u32>::from_handle(pro.workgroup_linear.expect("prologue"));
             if_(eq(local, lit(0u32)), || p.set(leader(wg)), || {});
@@ -73,7 +81,11 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
                 c.uses_subgroups = true;
                 let ty = T::naga_type(&mut c.module);
                 let result = c.expr(Expression::SubgroupOperationResult { ty });
-                c.stmt(Statement::SubgroupGather { mode: GatherMode::Broadcast(zero.h), argument: arg.h, result });
+                c.stmt(Statement::SubgroupGather {
+                    mode: GatherMode::Broadcast(zero.h),
+                    argument: arg.h,
+                    result,
+                });
                 Val::from_handle(result)
             })
         }
@@ -88,12 +100,21 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
                     stride: stride as u32,
                 })
             });
-            let g = add_global(&format!("group_share_{site}"), AddressSpace::WorkGroup, ty, None);
+            let g = add_global(
+                &format!("group_share_{site}"),
+                AddressSpace::WorkGroup,
+                ty,
+                None,
+            );
             let arr = Place::<[T; 1]>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
             let warp_in_wg = local / lit(WARP);
             let slot = super::val::place_index(arr, warp_in_wg);
             let group = global / lit(WARP);
-            if_(eq(local % lit(WARP), lit(0u32)), || slot.set(leader(group)), || {});
+            if_(
+                eq(local % lit(WARP), lit(0u32)),
+                || slot.set(leader(group)),
+                || {},
+            );
             barrier();
             let v = Var::new("shared", slot.get());
             barrier();
@@ -132,27 +153,49 @@ pub fn group_any(p: Val<bool>) -> Val<bool> {
             };
             let ty = with(|c| {
                 let base = <std::sync::atomic::AtomicU32 as GpuType>::naga_type(&mut c.module);
-                c.ty(TypeInner::Array { base, size: ArraySize::Constant(std::num::NonZeroU32::new(slots).unwrap()), stride: 4 })
+                c.ty(TypeInner::Array {
+                    base,
+                    size: ArraySize::Constant(std::num::NonZeroU32::new(slots).unwrap()),
+                    stride: 4,
+                })
             });
             let site = with(|c| {
                 let s = c.group_share_sites;
                 c.group_share_sites += 1;
                 s
             });
-            let g = add_global(&format!("group_any_{site}"), AddressSpace::WorkGroup, ty, None);
-            let arr = Place::<[std::sync::atomic::AtomicU32; 1]>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
+            let g = add_global(
+                &format!("group_any_{site}"),
+                AddressSpace::WorkGroup,
+                ty,
+                None,
+            );
+            let arr = Place::<[std::sync::atomic::AtomicU32; 1]>::from_handle(with(|c| {
+                c.expr(Expression::GlobalVariable(g))
+            }));
             let (slot_index, leader) = match spec.group {
                 Group::Warp => (local / lit(WARP), eq(local % lit(WARP), lit(0u32))),
                 _ => (lit(0u32), eq(local, lit(0u32))),
             };
             let slot = super::val::place_index(arr, slot_index);
-            if_(p, || {
-                slot.fetch_or(lit(1u32), std::sync::atomic::Ordering::Relaxed);
-            }, || {});
+            if_(
+                p,
+                || {
+                    slot.fetch_or(lit(1u32), std::sync::atomic::Ordering::Relaxed);
+                },
+                || {},
+            );
             barrier();
-            let v = Var::new("any", super::ops::ne(slot.load(std::sync::atomic::Ordering::Relaxed), lit(0u32)));
+            let v = Var::new(
+                "any",
+                super::ops::ne(slot.load(std::sync::atomic::Ordering::Relaxed), lit(0u32)),
+            );
             barrier();
-            if_(leader, || slot.store(lit(0u32), std::sync::atomic::Ordering::Relaxed), || {});
+            if_(
+                leader,
+                || slot.store(lit(0u32), std::sync::atomic::Ordering::Relaxed),
+                || {},
+            );
             // The clear must land before anybody sets the flag again.
             barrier();
             v.get()

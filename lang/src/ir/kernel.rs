@@ -7,8 +7,8 @@
 //! runtime needs; nothing here knows about WGSL or SPIR-V.
 
 use naga::{
-    AddressSpace, ArraySize, Binding, BuiltIn, Expression, FunctionArgument, GlobalVariable, Handle,
-    ResourceBinding, ShaderStage, Span, StorageAccess, TypeInner,
+    AddressSpace, ArraySize, Binding, BuiltIn, Expression, FunctionArgument, GlobalVariable,
+    Handle, ResourceBinding, ShaderStage, Span, StorageAccess, TypeInner,
 };
 use std::marker::PhantomData;
 
@@ -30,7 +30,11 @@ pub struct BuiltKernel {
 }
 
 /// Builds the kernel: `declare_and_run` declares parameters and records the body.
-pub fn build_kernel(info: &'static KernelInfo, spec: Spec, declare_and_run: impl FnOnce()) -> BuiltKernel {
+pub fn build_kernel(
+    info: &'static KernelInfo,
+    spec: Spec,
+    declare_and_run: impl FnOnce(),
+) -> BuiltKernel {
     validate_spec(info, &spec);
     let mut ctx = Ctx::new(info, spec);
     ctx.fns.push(FnState::new(info.name));
@@ -83,7 +87,11 @@ fn builtin_arg(name: &str, b: BuiltIn, inner: TypeInner) -> Handle<Expression> {
     with(|c| {
         let ty = c.ty(inner);
         let f = c.f();
-        let existing = f.func.arguments.iter().position(|a| a.binding == Some(Binding::BuiltIn(b)));
+        let existing = f
+            .func
+            .arguments
+            .iter()
+            .position(|a| a.binding == Some(Binding::BuiltIn(b)));
         let idx = match existing {
             Some(i) => i,
             None => {
@@ -97,7 +105,10 @@ fn builtin_arg(name: &str, b: BuiltIn, inner: TypeInner) -> Handle<Expression> {
         };
         if matches!(
             b,
-            BuiltIn::SubgroupSize | BuiltIn::SubgroupInvocationId | BuiltIn::SubgroupId | BuiltIn::NumSubgroups
+            BuiltIn::SubgroupSize
+                | BuiltIn::SubgroupInvocationId
+                | BuiltIn::SubgroupId
+                | BuiltIn::NumSubgroups
         ) {
             c.uses_subgroups = true;
         }
@@ -106,7 +117,10 @@ fn builtin_arg(name: &str, b: BuiltIn, inner: TypeInner) -> Handle<Expression> {
 }
 
 const U32: TypeInner = TypeInner::Scalar(naga::Scalar::U32);
-const UVEC3: TypeInner = TypeInner::Vector { size: naga::VectorSize::Tri, scalar: naga::Scalar::U32 };
+const UVEC3: TypeInner = TypeInner::Vector {
+    size: naga::VectorSize::Tri,
+    scalar: naga::Scalar::U32,
+};
 
 /// Values every specialisation may need are computed at the top of the entry point, so
 /// they dominate every later use (naga rejects uses outside the emitting block).
@@ -228,7 +242,11 @@ pub mod builtin {
         u32v(builtin_arg("subgroup_size", BuiltIn::SubgroupSize, U32))
     }
     pub fn subgroup_lane() -> Val<u32> {
-        u32v(builtin_arg("subgroup_lane", BuiltIn::SubgroupInvocationId, U32))
+        u32v(builtin_arg(
+            "subgroup_lane",
+            BuiltIn::SubgroupInvocationId,
+            U32,
+        ))
     }
     pub fn subgroup_id() -> Val<u32> {
         u32v(builtin_arg("subgroup_id", BuiltIn::SubgroupId, U32))
@@ -242,19 +260,53 @@ fn round_up(x: usize, a: usize) -> usize {
     x.div_ceil(a) * a
 }
 
-pub(crate) fn add_global(name: &str, space: AddressSpace, ty: Handle<naga::Type>, kind: Option<BindingKind>) -> Handle<GlobalVariable> {
+pub(crate) fn add_global(
+    name: &str,
+    space: AddressSpace,
+    ty: Handle<naga::Type>,
+    kind: Option<BindingKind>,
+) -> Handle<GlobalVariable> {
     with(|c| {
         let binding = kind.map(|k| {
             let b = c.next_binding;
             c.next_binding += 1;
-            c.bindings.push(RtBinding { binding: b, kind: k, name: name.to_string() });
-            ResourceBinding { group: 0, binding: b }
+            c.bindings.push(RtBinding {
+                binding: b,
+                kind: k,
+                name: name.to_string(),
+            });
+            ResourceBinding {
+                group: 0,
+                binding: b,
+            }
         });
         c.module.global_variables.append(
-            GlobalVariable { name: Some(name.to_string()), space, binding, ty, init: None, memory_decorations: Default::default() },
+            GlobalVariable {
+                name: Some(name.to_string()),
+                space,
+                binding,
+                ty,
+                init: None,
+                memory_decorations: Default::default(),
+            },
             Span::UNDEFINED,
         )
     })
+}
+
+/// Where a uniform parameter lives: a uniform buffer, or a read-only storage buffer where
+/// the specialisation asks for one (`Spec::uniforms_as_storage`).
+pub(crate) fn uniform_space() -> (AddressSpace, BindingKind) {
+    if with(|c| c.spec.uniforms_as_storage) {
+        (
+            AddressSpace::Storage {
+                access: naga::StorageAccess::LOAD,
+            },
+            BindingKind::StorageRead,
+        )
+    } else {
+        (AddressSpace::Uniform, BindingKind::Uniform)
+    }
 }
 
 fn global_ptr(g: Handle<GlobalVariable>) -> Handle<Expression> {
@@ -281,9 +333,20 @@ fn lengths_global() -> Handle<GlobalVariable> {
     }
     let ty = with(|c| {
         let base = <u32 as GpuType>::naga_type(&mut c.module);
-        c.ty(TypeInner::Array { base, size: ArraySize::Dynamic, stride: 4 })
+        c.ty(TypeInner::Array {
+            base,
+            size: ArraySize::Dynamic,
+            stride: 4,
+        })
     });
-    let g = add_global(LENGTHS_BINDING, AddressSpace::Storage { access: StorageAccess::LOAD }, ty, Some(BindingKind::StorageRead));
+    let g = add_global(
+        LENGTHS_BINDING,
+        AddressSpace::Storage {
+            access: StorageAccess::LOAD,
+        },
+        ty,
+        Some(BindingKind::StorageRead),
+    );
     with(|c| c.lengths = Some(g));
     g
 }
@@ -309,15 +372,31 @@ impl<T: GpuType> Buffer<T> {
         );
         let ty = with(|c| {
             let base = T::naga_type(&mut c.module);
-            c.ty(TypeInner::Array { base, size: ArraySize::Dynamic, stride: stride as u32 })
+            c.ty(TypeInner::Array {
+                base,
+                size: ArraySize::Dynamic,
+                stride: stride as u32,
+            })
         });
-        let access = if writable { StorageAccess::LOAD | StorageAccess::STORE } else { StorageAccess::LOAD };
-        let kind = if writable { BindingKind::StorageReadWrite } else { BindingKind::StorageRead };
+        let access = if writable {
+            StorageAccess::LOAD | StorageAccess::STORE
+        } else {
+            StorageAccess::LOAD
+        };
+        let kind = if writable {
+            BindingKind::StorageReadWrite
+        } else {
+            BindingKind::StorageRead
+        };
         let slot = with(|c| {
             c.storage_buffers += 1;
             c.storage_buffers - 1
         });
-        Buffer { g: add_global(name, AddressSpace::Storage { access }, ty, Some(kind)), slot, _t: PhantomData }
+        Buffer {
+            g: add_global(name, AddressSpace::Storage { access }, ty, Some(kind)),
+            slot,
+            _t: PhantomData,
+        }
     }
 
     /// `buf.len()`: the element count the launch passed (not the bound size, which for an
@@ -326,7 +405,10 @@ impl<T: GpuType> Buffer<T> {
         let p = global_ptr(lengths_global());
         let slot = self.slot;
         Val::from_handle(with(|c| {
-            let at = c.expr(Expression::AccessIndex { base: p, index: slot });
+            let at = c.expr(Expression::AccessIndex {
+                base: p,
+                index: slot,
+            });
             c.expr(Expression::Load { pointer: at })
         }))
     }
@@ -360,7 +442,11 @@ impl<T: GpuType> Uniform<T> {
             with(|c| c.unsupported.push(format!("uniform `{name}`: {why}")));
         }
         let ty = with(|c| T::naga_type(&mut c.module));
-        Uniform { g: add_global(name, AddressSpace::Uniform, ty, Some(BindingKind::Uniform)), _t: PhantomData }
+        let (space, kind) = uniform_space();
+        Uniform {
+            g: add_global(name, space, ty, Some(kind)),
+            _t: PhantomData,
+        }
     }
     pub fn get(&self) -> Val<T> {
         self.as_place().get()
@@ -387,7 +473,10 @@ impl<T> Copy for Workgroup<T> {}
 impl<T: GpuType> Workgroup<T> {
     pub fn declare(name: &str) -> Workgroup<T> {
         let ty = with(|c| T::naga_type(&mut c.module));
-        Workgroup { g: add_global(name, AddressSpace::WorkGroup, ty, None), _t: PhantomData }
+        Workgroup {
+            g: add_global(name, AddressSpace::WorkGroup, ty, None),
+            _t: PhantomData,
+        }
     }
 }
 impl<T> AsPlace for Workgroup<T> {
