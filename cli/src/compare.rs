@@ -71,7 +71,7 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
             }
             let rel = (x - y).abs() / x.abs().max(y.abs());
             // NaN compares as the worst difference.
-            if !(rel <= worst) {
+            if rel.is_nan() || rel > worst {
                 (worst, worst_at) = (if rel.is_nan() { f32::INFINITY } else { rel }, i);
             }
         }

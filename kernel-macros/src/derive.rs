@@ -96,7 +96,7 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
             let after_msg = format!("GpuType `{name_lit}`: field `{flit}` follows the struct field `{pname}` too closely for a uniform (WGSL rounds a struct member's size up to 16 bytes there); add padding before it");
             uniform_checks.push(quote! {
                 if <#pty as ::cohort::ir::GpuType>::IS_STRUCT
-                    && ::core::mem::offset_of!(#name, #fname) < ::core::mem::offset_of!(#name, #pname) + (::core::mem::size_of::<#pty>() + 15) / 16 * 16
+                    && ::core::mem::offset_of!(#name, #fname) < ::core::mem::offset_of!(#name, #pname) + ::core::mem::size_of::<#pty>().div_ceil(16) * 16
                 {
                     return ::core::option::Option::Some(#after_msg);
                 }

@@ -321,6 +321,16 @@ impl Walker<'_> {
         Some(notes)
     }
 
+    /// Whether every expression is uniform. Each one is visited, also after a divergent
+    /// one: visiting records assignments and reports misplaced barriers (no short circuit).
+    fn all_uniform<'e>(&mut self, exprs: impl Iterator<Item = &'e Expr>) -> bool {
+        let mut uniform = true;
+        for e in exprs {
+            uniform &= self.expr(e);
+        }
+        uniform
+    }
+
     fn expr(&mut self, e: &Expr) -> bool {
         match e {
             Expr::Lit(_) => true,
@@ -395,15 +405,12 @@ impl Walker<'_> {
                 }
                 true
             }
-            Expr::Array(a) => a.elems.iter().fold(true, |acc, x| self.expr(x) && acc),
+            Expr::Array(a) => self.all_uniform(a.elems.iter()),
             Expr::Repeat(r) => self.expr(&r.expr),
-            Expr::Struct(s) => s
-                .fields
-                .iter()
-                .fold(true, |acc, f| self.expr(&f.expr) && acc),
+            Expr::Struct(s) => self.all_uniform(s.fields.iter().map(|f| &f.expr)),
             Expr::MethodCall(m) => {
                 let r = self.expr(&m.receiver);
-                let args = m.args.iter().fold(true, |acc, a| self.expr(a) && acc);
+                let args = self.all_uniform(m.args.iter());
                 let atomic = matches!(
                     m.method.to_string().as_str(),
                     "fetch_add"

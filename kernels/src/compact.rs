@@ -46,7 +46,7 @@ pub const WORDS: u32 = BLOCK / 32;
 /// Dispatches that [`record`] adds to a batch.
 pub const DISPATCHES: usize = 3;
 
-const _: () = assert!(WORDS == WG && PER_THREAD == 32 && WG % 32 == 0);
+const _: () = assert!(WORDS == WG && PER_THREAD == 32 && WG.is_multiple_of(32));
 
 /// Blocks for `n` rays (no overflow near `u32::MAX`).
 #[kernel_fn]

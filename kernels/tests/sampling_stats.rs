@@ -173,7 +173,7 @@ fn directions_follow_their_pdf() {
 #[test]
 fn weighted_estimates_are_unbiased() {
     // E[w * g(dir)] = integral of g cos / pi, for a g that is not constant.
-    let g = |d: Vec3| (1.0 + d.x as f64 * 0.5 + d.z as f64 * d.z as f64 * 2.0) as f64;
+    let g = |d: Vec3| 1.0 + d.x as f64 * 0.5 + d.z as f64 * d.z as f64 * 2.0;
     // Exact: integral (1 + x/2 + 2 z^2) cos/pi = 1 + 0 + 2 * E[z^2] = 1 + 2 * 1/2 = 2.
     let exact = 2.0;
     let samples = 400_000u32;

@@ -327,7 +327,7 @@ fn compressed_traversal_matches_8_wide() {
                 .filter(|&k| k % 7 != 0 && k % 11 != 0)
                 .collect();
             let pick = |v: &[Vec4]| oblique.iter().map(|&k| v[k]).collect::<Vec<_>>();
-            let host_oblique: Vec<_> = oblique.iter().map(|&k| host[k].clone()).collect();
+            let host_oblique: Vec<_> = oblique.iter().map(|&k| host[k]).collect();
             let mismatches = mismatches(&pick(&b), &host_oblique, tris);
             assert!(
                 mismatches * 10_000 <= n as usize,

@@ -14,7 +14,7 @@
     clippy::neg_cmp_op_on_partial_ord,
     clippy::cast_nan_to_int,
     clippy::manual_is_multiple_of,
-    clippy::manual_checked_div
+    clippy::manual_checked_ops
 )]
 
 mod common;

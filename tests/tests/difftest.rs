@@ -15,7 +15,7 @@ use glam::{UVec2, UVec4, Vec3, Vec4};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 fn run_all<T: PartialEq + std::fmt::Debug>(name: &str, f: impl Fn(&Device) -> T) -> Vec<T> {
-    let outs: Vec<T> = devices().iter().map(|d| f(d)).collect();
+    let outs: Vec<T> = devices().iter().map(&f).collect();
     for w in outs.windows(2) {
         assert_eq!(w[0], w[1], "{name}: wgpu and Vulkan disagree");
     }
@@ -399,7 +399,7 @@ fn group_any_is_per_group() {
                 Group::Grid => unreachable!(),
             };
             assert!(
-                want.iter().any(|&w| w != 0) && want.iter().any(|&w| w == 0),
+                want.iter().any(|&w| w != 0) && want.contains(&0),
                 "{group:?}: the inputs must give both outcomes"
             );
             assert_eq!(

@@ -228,7 +228,9 @@ unsafe impl<T: GpuType, const N: usize> GpuType for [T; N] {
     const GPU_SIZE: usize = round_up(T::GPU_SIZE, T::GPU_ALIGN) * N;
     const HOST_SHAREABLE: bool =
         T::HOST_SHAREABLE && std::mem::size_of::<T>() == round_up(T::GPU_SIZE, T::GPU_ALIGN);
-    const UNIFORM_PROBLEM: Option<&'static str> = if round_up(T::GPU_SIZE, T::GPU_ALIGN) % 16 != 0 {
+    const UNIFORM_PROBLEM: Option<&'static str> = if !round_up(T::GPU_SIZE, T::GPU_ALIGN)
+        .is_multiple_of(16)
+    {
         Some("an array whose elements are not 16 bytes apart cannot be in a uniform (WGSL's uniform layout needs a 16-byte array stride): use an array of Vec4 / UVec4 / IVec4, or pass the data in a storage buffer (&[T])")
     } else {
         T::UNIFORM_PROBLEM

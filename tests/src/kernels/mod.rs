@@ -1,5 +1,8 @@
 //! One module per kernel (or kernel family); each doc comment says which part of the
 //! language subset it covers.
+// Test kernels are written as a new user writes kernels (index loops over buffers, the
+// operations a test exercises, e.g. max-then-min, which differs from clamp on NaN).
+#![allow(clippy::needless_range_loop, clippy::manual_clamp)]
 
 pub mod bits;
 pub mod collatz;
