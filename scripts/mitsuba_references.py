@@ -60,10 +60,7 @@ AREA_LIGHT = """
 """
 
 
-def scene(integrator, body):
-    return f"""<scene version="3.0.0">
-    <integrator type="path">{integrator}</integrator>
-    <sensor type="perspective">
+PERSPECTIVE = """<sensor type="perspective">
         <float name="fov" value="45"/>
         <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
         <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
@@ -71,7 +68,14 @@ def scene(integrator, body):
             <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
             <rfilter type="box"/>
         </film>
-    </sensor>
+    </sensor>"""
+
+
+def scene(integrator, body, sensor=PERSPECTIVE):
+    sensor = sensor.replace("{SIZE}", str(SIZE))
+    return f"""<scene version="3.0.0">
+    <integrator type="path">{integrator}</integrator>
+    {sensor}
 {BOX}{body}
 </scene>
 """
@@ -105,6 +109,42 @@ SCENES = {
         <rgb name="intensity" value="8, 7, 6"/>
         <float name="cutoff_angle" value="35"/><float name="beam_width" value="20"/>
     </emitter>""",
+    ),
+    # A shapegroup (a cube coloured by a sampled spectrum, on a small slab) placed by two
+    # instances, one scaled and turned.
+    "instances": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="shapegroup" id="group">
+        <shape type="cube">
+            <transform name="to_world"><scale value="0.15"/><translate y="0.15"/></transform>
+            <bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 480:0.2, 560:0.8, 640:0.5, 700:0.3"/></bsdf>
+        </shape>
+        <shape type="cube">
+            <transform name="to_world"><scale x="0.25" y="0.02" z="0.25"/><translate y="0.02"/></transform>
+        </shape>
+    </shape>
+    <shape type="instance"><ref id="group"/>
+        <transform name="to_world"><translate x="-0.5" z="0.2"/></transform></shape>
+    <shape type="instance"><ref id="group"/>
+        <transform name="to_world"><scale value="1.5"/><rotate y="1" angle="30"/><translate x="-0.3" y="0.9" z="-0.7"/></transform></shape>""",
+    ),
+    # An orthographic camera, its view sized by the scale before the lookat, seeing the box
+    # (and its open front's sky) from slightly above.
+    "orthographic": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.2, 0.25, 0.3"/></emitter>',
+        sensor="""<sensor type="orthographic">
+        <transform name="to_world"><scale x="1.25" y="1.25"/><lookat origin="0.3, 1.6, 3.4" target="0, 0.9, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>""",
     ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(

@@ -20,14 +20,35 @@ use crate::sampling::{
 };
 use cohort::prelude::*;
 
-/// Camera ray through a random point of `pixel`: origin in xyz (w = tmin), direction.
+/// A random point of `pixel` on the film, as the offset `(2 sx - 1) right + (1 - 2 sy) up`
+/// from the image centre (`sx`, `sy` in [0, 1], y down).
 #[kernel_fn]
-pub fn camera_dir(f: &Frame, pixel: u32, key: u32) -> Vec3 {
+pub fn film_offset(f: &Frame, pixel: u32, key: u32) -> Vec3 {
     let px = (pixel % f.width) as f32 + uniform(key, 0);
     let py = (pixel / f.width) as f32 + uniform(key, 1);
     let sx = px / f.width as f32;
     let sy = py / f.height as f32;
-    (f.cam_forward + f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)).normalize()
+    f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)
+}
+
+/// Direction of the camera ray through film offset `film` (`film_offset`).
+#[kernel_fn]
+pub fn camera_dir(f: &Frame, film: Vec3) -> Vec3 {
+    let mut d = f.cam_forward;
+    if f.orthographic == 0 {
+        d += film;
+    }
+    d.normalize()
+}
+
+/// Origin of the camera ray through film offset `film` (`film_offset`).
+#[kernel_fn]
+pub fn camera_origin(f: &Frame, film: Vec3) -> Vec3 {
+    let mut o = f.cam_origin;
+    if f.orthographic != 0 {
+        o += film;
+    }
+    o
 }
 
 /// Path throughput of a fresh camera ray; w is the BSDF-sampling density of the ray's
@@ -53,10 +74,12 @@ pub fn init_paths(
         return;
     }
     let pixel = slot_pixel[g];
-    let d = camera_dir(f, pixel, stream(f.seed, pixel, f.first_path, 0));
+    let film = film_offset(f, pixel, stream(f.seed, pixel, f.first_path, 0));
+    let o = camera_origin(f, film);
+    let d = camera_dir(f, film);
     idrays[g] = gi;
     state[g] = UVec4::new(pixel, f.first_path, 0, 0);
-    ray_o[g] = Vec4::new(f.cam_origin.x, f.cam_origin.y, f.cam_origin.z, 0.0);
+    ray_o[g] = Vec4::new(o.x, o.y, o.z, 0.0);
     ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
     beta[g] = CAMERA_BETA;
     radiance[g] = Vec4::ZERO;
@@ -426,10 +449,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 done = DONE;
                 wg_done[1].fetch_add(1, Ordering::Relaxed);
             }
-            let cd = camera_dir(f, pixel, stream(f.seed, pixel, next, 0));
+            let film = film_offset(f, pixel, stream(f.seed, pixel, next, 0));
             state[r] = UVec4::new(pixel, next, 0, done);
-            ray_o[r] = f.cam_origin.extend(0.0);
-            ray_d[r] = cd.extend(0.0);
+            ray_o[r] = camera_origin(f, film).extend(0.0);
+            ray_d[r] = camera_dir(f, film).extend(0.0);
             beta[r] = CAMERA_BETA;
             flags[i] = 0;
         }

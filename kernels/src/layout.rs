@@ -123,7 +123,9 @@ pub struct Frame {
     /// 1: Mitsuba's `max_depth` 0: no path contributes anything (`max_depth` above is
     /// 0 = unlimited).
     pub zero_depth: u32,
-    pub pad3: u32,
+    /// 1: orthographic camera: camera rays start at `cam_origin` moved across the film by
+    /// `cam_right` and `cam_up`, all along `cam_forward` (`cohort_scenes::CameraFrame`).
+    pub orthographic: u32,
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`

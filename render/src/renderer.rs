@@ -419,6 +419,7 @@ impl<'d> Renderer<'d> {
             cam_right: f.right,
             slots: n as u32,
             cam_up: f.up,
+            orthographic: f.orthographic as u32,
             environment: scene.environment,
             max_depth,
             zero_depth,

@@ -171,7 +171,10 @@ impl WgpuDevice {
             // The software driver under wgpu, as under the Vulkan backend.
             uniforms_as_storage: crate::device::uniforms_as_storage(
                 adapter_info.device_type == wgpu::DeviceType::Cpu
-                    && adapter_info.driver.to_ascii_lowercase().contains("llvmpipe"),
+                    && adapter_info
+                        .driver
+                        .to_ascii_lowercase()
+                        .contains("llvmpipe"),
             ),
         };
         let limits = Limits {

@@ -29,8 +29,20 @@ impl FovAxis {
     }
 }
 
-/// Perspective pinhole camera with a box reconstruction filter (each sample lands in the pixel it
-/// was drawn in).
+/// How the camera maps the film to rays (Mitsuba's sensor plugin).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Projection {
+    /// `perspective`: rays from the origin through the film, `fov` wide.
+    #[default]
+    Perspective,
+    /// `orthographic`: parallel rays along the view axis from the near-clip plane; the film
+    /// spans camera-space x in [-1, 1] and y in [-1/aspect, 1/aspect] (scale `to_world` to
+    /// widen it), as in Mitsuba. `fov` is unused.
+    Orthographic,
+}
+
+/// Perspective pinhole (or orthographic) camera with a box reconstruction filter (each sample
+/// lands in the pixel it was drawn in).
 ///
 /// `to_world` is kept whole instead of (origin, target, up) because Mitsuba allows any transform
 /// before `lookat` (a common one is `scale x=-1`, a mirrored image) and those must survive;
@@ -47,17 +59,22 @@ pub struct Camera {
     /// Distance (along the view axis) before which nothing is seen; Mitsuba default 1e-2.
     pub near_clip: f32,
     pub far_clip: f32,
+    pub projection: Projection,
 }
 
 /// What a camera-ray kernel needs: the direction for film coordinates `(sx, sy)` in `[0,1]^2`
 /// (x left to right, y top to bottom) is `forward + (2 sx - 1) right + (1 - 2 sy) up`, not
 /// normalised. `right` and `up` already carry the tangent of the half field of view.
 #[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Orthographic cameras instead move the origin: the ray for `(sx, sy)` starts at `origin +
+/// (2 sx - 1) right + (1 - 2 sy) up` and runs along `forward`.
 pub struct CameraFrame {
     pub origin: Vec3,
     pub forward: Vec3,
     pub right: Vec3,
     pub up: Vec3,
+    pub orthographic: bool,
 }
 
 impl Camera {
@@ -80,6 +97,7 @@ impl Camera {
             height,
             near_clip: 1e-2,
             far_clip: 1e4,
+            projection: Projection::Perspective,
         })
     }
 
@@ -135,6 +153,20 @@ impl Camera {
     }
 
     pub fn frame(&self) -> CameraFrame {
+        if self.projection == Projection::Orthographic {
+            // Camera x points left, so image-right is -x; rays start on the near-clip plane.
+            return CameraFrame {
+                origin: self
+                    .to_world
+                    .transform_point3(Vec3::new(0.0, 0.0, self.near_clip)),
+                forward: self.to_world.transform_vector3(Vec3::Z),
+                right: self.to_world.transform_vector3(Vec3::new(-1.0, 0.0, 0.0)),
+                up: self
+                    .to_world
+                    .transform_vector3(Vec3::new(0.0, 1.0 / self.aspect(), 0.0)),
+                orthographic: true,
+            };
+        }
         let (tx, ty) = self.tan_half_fov();
         // Camera x points left, so image-right is -x.
         CameraFrame {
@@ -142,13 +174,24 @@ impl Camera {
             forward: self.to_world.transform_vector3(Vec3::Z),
             right: self.to_world.transform_vector3(Vec3::new(-tx, 0.0, 0.0)),
             up: self.to_world.transform_vector3(Vec3::new(0.0, ty, 0.0)),
+            orthographic: false,
+        }
+    }
+
+    /// The ray (origin, unit direction) through film point `(sx, sy)` in `[0,1]^2` (y down).
+    pub fn ray(&self, sx: f32, sy: f32) -> (Vec3, Vec3) {
+        let f = self.frame();
+        let film = (2.0 * sx - 1.0) * f.right + (1.0 - 2.0 * sy) * f.up;
+        if f.orthographic {
+            (f.origin + film, f.forward.normalize())
+        } else {
+            (f.origin, (f.forward + film).normalize())
         }
     }
 
     /// Unit world direction through film point `(sx, sy)` in `[0,1]^2` (y down).
     pub fn ray_direction(&self, sx: f32, sy: f32) -> Vec3 {
-        let f = self.frame();
-        (f.forward + (2.0 * sx - 1.0) * f.right + (1.0 - 2.0 * sy) * f.up).normalize()
+        self.ray(sx, sy).1
     }
 }
 

@@ -641,8 +641,8 @@ fn unsupported_plugins_strict_and_lenient() {
             "pinhole",
         ),
         (
-            r#"<sensor type="orthographic"/>"#,
-            "sensor 'orthographic'",
+            r#"<sensor type="radiancemeter"/>"#,
+            "sensor 'radiancemeter'",
             "perspective camera",
         ),
     ] {

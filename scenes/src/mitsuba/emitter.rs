@@ -142,7 +142,9 @@ fn vector_or_to_world(obj: &Obj, name: &str) -> Result<Result<Vec3, Mat4>, Scene
 
 /// A non-negative colour parameter, 1 when absent (Mitsuba's default for every emitter).
 fn spectrum<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj, name: &str) -> Result<Vec3, SceneError> {
-    let v = ctx.color(obj, name)?.unwrap_or(Vec3::ONE);
+    let v = ctx
+        .color_as(obj, name, super::SpectrumUse::Emission)?
+        .unwrap_or(Vec3::ONE);
     if !v.is_finite() || v.min_element() < 0.0 {
         return Err(syntax(
             obj.loc_of(name),

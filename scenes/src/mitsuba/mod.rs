@@ -16,12 +16,16 @@
 //! warnings. The README's table lists what is read, approximated and refused.
 
 mod bsdf;
+mod cie_tables;
 mod diag;
 mod emitter;
 mod plugins;
 mod props;
 mod shape;
+mod spectrum;
 mod transform;
+
+use spectrum::SpectrumUse;
 mod xml;
 
 use std::collections::HashMap;
@@ -30,7 +34,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 use crate::builder::SceneBuilder;
-use crate::camera::{Camera, FovAxis};
+use crate::camera::{Camera, FovAxis, Projection};
 use crate::error::{SceneError, Warning};
 use crate::scene::{Integrator, Scene};
 
@@ -129,8 +133,32 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// A colour parameter given as a value, or as a texture (nested or `<ref name=...>`).
+    /// A colour parameter given as a value, or as a texture (nested or `<ref name=...>`); a
+    /// sampled spectrum is read as a reflectance.
     pub fn color(&mut self, obj: &'a Obj, name: &str) -> Result<Option<Vec3>, SceneError> {
+        self.color_as(obj, name, SpectrumUse::Reflectance)
+    }
+
+    /// [`color`](Self::color), with a sampled spectrum converted as `used_as` says (Mitsuba
+    /// converts an emitter's spectra without the D65 illuminant and clamps them only at 0).
+    pub fn color_as(
+        &mut self,
+        obj: &'a Obj,
+        name: &str,
+        used_as: SpectrumUse,
+    ) -> Result<Option<Vec3>, SceneError> {
+        if let Some(samples) = obj.spectrum_samples(name) {
+            let (rgb, clamped) = spectrum::to_srgb(&samples, used_as);
+            if clamped {
+                self.diag.warn(
+                    obj.loc_of(name),
+                    format!(
+                        "spectrum '{name}': out-of-gamut colour clamped to {rgb}, as Mitsuba does"
+                    ),
+                );
+            }
+            return Ok(Some(rgb));
+        }
         if let Some(v) = obj.color(name)? {
             return Ok(Some(v));
         }
@@ -311,6 +339,7 @@ fn default_camera() -> Camera {
         height: 576,
         near_clip: 1e-2,
         far_clip: 1e4,
+        projection: Projection::Perspective,
     }
 }
 
@@ -322,6 +351,22 @@ fn fov_from_focal_length(mm: f64) -> f32 {
 fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), SceneError> {
     match obj.plugin.as_str() {
         "perspective" => {}
+        "orthographic" => {
+            let camera = read_orthographic(ctx, obj)?;
+            obj.ignore("shutter_open");
+            obj.ignore("shutter_close");
+            obj.ignore("srf");
+            let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+            obj.finish(&mut ctx.diag)?;
+            return Ok((
+                Camera {
+                    width,
+                    height,
+                    ..camera
+                },
+                spp,
+            ));
+        }
         "thinlens" => {
             ctx.diag.unsupported(
                 &obj.loc,
@@ -432,6 +477,36 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
         height: 576,
         near_clip,
         far_clip,
+        projection: Projection::Perspective,
+    })
+}
+
+/// Mitsuba `orthographic`: `to_world` (its scale sizes the view), `near_clip` (where rays
+/// start), `far_clip`.
+fn read_orthographic(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
+    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let near_clip = obj.float("near_clip")?.unwrap_or(1e-2);
+    let far_clip = obj.float("far_clip")?.unwrap_or(1e4);
+    if !(near_clip >= 0.0 && near_clip < far_clip) {
+        return Err(syntax(
+            obj.loc_of("near_clip"),
+            "near_clip must be >= 0 and less than far_clip",
+        ));
+    }
+    if far_clip != 1e4 {
+        ctx.diag.warn(
+            obj.loc_of("far_clip"),
+            "far_clip is not supported by the renderer: nothing is clipped behind it",
+        );
+    }
+    Ok(Camera {
+        near_clip,
+        far_clip,
+        projection: Projection::Orthographic,
+        ..Camera {
+            to_world,
+            ..default_camera()
+        }
     })
 }
 

@@ -22,6 +22,9 @@ pub(crate) enum Value {
     Boolean(bool),
     String(String),
     Color(Vec3),
+    /// A sampled spectrum, (wavelength in nm, value) with wavelengths increasing: its colour
+    /// depends on what it describes (`spectrum::SpectrumUse`).
+    Spectrum(Vec<(f64, f64)>),
     Vector(Vec3),
     Transform(Mat4),
 }
@@ -34,6 +37,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::String(_) => "string",
             Value::Color(_) => "rgb",
+            Value::Spectrum(_) => "spectrum",
             Value::Vector(_) => "point/vector",
             Value::Transform(_) => "transform",
         }
@@ -272,7 +276,7 @@ fn parse_value(diag: &mut Diag, c: &Elem) -> Result<Value, SceneError> {
         "string" => Value::String(value().to_string()),
         "rgb" => Value::Color(rgb(loc, value())?),
         "spectrum" => match (c.attr("value"), c.attr("filename")) {
-            (Some(v), None) => Value::Color(spectrum(diag, loc, v)?),
+            (Some(v), None) => spectrum(loc, v)?,
             (None, Some(f)) => {
                 diag.unsupported(
                     loc,
@@ -363,35 +367,48 @@ fn rgb(loc: &Location, text: &str) -> Result<Vec3, SceneError> {
     }
 }
 
-/// A constant `<spectrum value="0.5"/>` is grey (three numbers are not a spectrum); a sampled one ("400:0.1, 500:0.2, ...") is
-/// approximated by its mean, with a warning, since the renderer is RGB.
-fn spectrum(diag: &mut Diag, loc: &Location, text: &str) -> Result<Vec3, SceneError> {
+/// A constant `<spectrum value="0.5"/>` is grey (three numbers are not a spectrum); a sampled
+/// one ("400:0.1, 500:0.2, ...", wavelengths in nm, increasing) is kept as samples and
+/// converted to a colour where it is used, as Mitsuba's RGB variants do (`spectrum.rs`).
+fn spectrum(loc: &Location, text: &str) -> Result<Value, SceneError> {
     if !text.contains(':') {
         return match numbers(loc, text)?.as_slice() {
-            [v] => Ok(Vec3::splat(*v as f32)),
+            [v] => Ok(Value::Color(Vec3::splat(*v as f32))),
             _ => Err(syntax(
                 loc,
                 format!("spectrum value '{text}' is neither one number nor wavelength:value pairs"),
             )),
         };
     }
-    let mut values = Vec::new();
+    let mut samples: Vec<(f64, f64)> = Vec::new();
     for pair in text.split(',').filter(|s| !s.trim().is_empty()) {
-        let Some((_, v)) = pair.split_once(':') else {
-            return Err(syntax(loc, format!("bad spectrum entry '{pair}'")));
+        let Some((w, v)) = pair.split_once(':') else {
+            return Err(syntax(
+                loc,
+                format!(
+                    "bad spectrum entry '{}' (write wavelength:value)",
+                    pair.trim()
+                ),
+            ));
         };
-        values.push(number(loc, v)?);
+        let w = number(loc, w)?;
+        if let Some(&(prev, _)) = samples.last() {
+            if w <= prev {
+                return Err(syntax(
+                    loc,
+                    format!("spectrum wavelengths must increase: {w} nm follows {prev} nm"),
+                ));
+            }
+        }
+        samples.push((w, number(loc, v)?));
     }
-    if values.is_empty() {
-        return Err(syntax(loc, "empty spectrum"));
+    if samples.len() < 2 {
+        return Err(syntax(
+            loc,
+            format!("sampled spectrum '{text}' needs at least two wavelength:value pairs"),
+        ));
     }
-    diag.warn(
-        loc,
-        "sampled spectrum approximated by its mean value (grey)",
-    );
-    Ok(Vec3::splat(
-        (values.iter().sum::<f64>() / values.len() as f64) as f32,
-    ))
+    Ok(Value::Spectrum(samples))
 }
 
 impl Obj {
@@ -505,11 +522,22 @@ impl Obj {
         let Some(p) = self.prop(name) else {
             return Ok(None);
         };
-        match p.value {
-            Value::Color(v) => Ok(Some(v)),
-            Value::Float(v) => Ok(Some(Vec3::splat(v as f32))),
-            Value::Integer(v) => Ok(Some(Vec3::splat(v as f32))),
+        match &p.value {
+            Value::Color(v) => Ok(Some(*v)),
+            Value::Spectrum(samples) => Ok(Some(
+                super::spectrum::to_srgb(samples, super::spectrum::SpectrumUse::Reflectance).0,
+            )),
+            Value::Float(v) => Ok(Some(Vec3::splat(*v as f32))),
+            Value::Integer(v) => Ok(Some(Vec3::splat(*v as f32))),
             _ => Err(self.mismatch(p, "a colour (rgb, spectrum or float)")),
+        }
+    }
+
+    /// The samples of a sampled-spectrum property (marking it used), where it is one.
+    pub fn spectrum_samples(&self, name: &str) -> Option<Vec<(f64, f64)>> {
+        match &self.prop(name)?.value {
+            Value::Spectrum(samples) => Some(samples.clone()),
+            _ => None,
         }
     }
 

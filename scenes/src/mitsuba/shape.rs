@@ -27,6 +27,80 @@ pub(crate) fn add_shape<'a>(
     obj: &'a Obj,
     builder: &mut SceneBuilder,
 ) -> Result<(), SceneError> {
+    match obj.plugin.as_str() {
+        // A group is drawn only where an instance places it.
+        "shapegroup" => group_members(ctx, obj).map(|_| ()),
+        "instance" => add_instance(ctx, obj, builder),
+        _ => add_placed(ctx, obj, builder, Mat4::IDENTITY, false),
+    }
+}
+
+/// The shapes of a `shapegroup`, checked as Mitsuba checks them: shapes only, no nested
+/// groups or instances, nothing that emits.
+fn group_members<'a>(ctx: &mut Ctx<'a>, group: &'a Obj) -> Result<Vec<&'a Obj>, SceneError> {
+    let mut members = Vec::new();
+    for c in &group.children {
+        let t = ctx.target(c)?;
+        if t.tag != "shape" {
+            continue; // reported as unused by `finish`
+        }
+        c.take();
+        if matches!(t.plugin.as_str(), "shapegroup" | "instance") {
+            return Err(syntax(
+                &c.loc,
+                format!(
+                    "a '{}' inside a shapegroup: Mitsuba does not permit nested instancing",
+                    t.plugin
+                ),
+            ));
+        }
+        members.push(t);
+    }
+    group.finish(&mut ctx.diag)?;
+    Ok(members)
+}
+
+/// Mitsuba `instance`: the shapes of the referenced `shapegroup`, placed by its `to_world`.
+fn add_instance<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
+    builder: &mut SceneBuilder,
+) -> Result<(), SceneError> {
+    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let mut group = None;
+    for c in &obj.children {
+        let t = ctx.target(c)?;
+        if t.tag == "shape" && t.plugin == "shapegroup" {
+            c.take();
+            if group.replace(t).is_some() {
+                return Err(syntax(
+                    &c.loc,
+                    "an instance refers to exactly one shapegroup",
+                ));
+            }
+        }
+    }
+    obj.finish(&mut ctx.diag)?;
+    let Some(group) = group else {
+        return Err(syntax(
+            &obj.loc,
+            "an instance needs a shapegroup: <ref id=\"...\"/> to a <shape type=\"shapegroup\">",
+        ));
+    };
+    for member in group_members(ctx, group)? {
+        add_placed(ctx, member, builder, to_world, true)?;
+    }
+    Ok(())
+}
+
+/// One shape, its own `to_world` preceded by `outer` (an instance's placement).
+fn add_placed<'a>(
+    ctx: &mut Ctx<'a>,
+    obj: &'a Obj,
+    builder: &mut SceneBuilder,
+    outer: Mat4,
+    in_group: bool,
+) -> Result<(), SceneError> {
     let plugin = obj.plugin.as_str();
     if !matches!(
         plugin,
@@ -36,7 +110,7 @@ pub(crate) fn add_shape<'a>(
             .diag
             .unsupported(&obj.loc, plugins::describe("shape", plugin), "skipped");
     }
-    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let to_world = outer * obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
     let flip = obj.boolean("flip_normals")?.unwrap_or(false);
 
     let (mut mesh, shading, name) = match plugin {
@@ -119,6 +193,12 @@ pub(crate) fn add_shape<'a>(
                     bsdf = Some(parsed);
                 }
             }
+            ("emitter", _) if in_group => {
+                return Err(syntax(
+                    &c.loc,
+                    "an emitter on a shape inside a shapegroup: Mitsuba does not support instancing emitters",
+                ));
+            }
             ("emitter", "area") => {
                 c.take();
                 let key = t as *const Obj as usize;
@@ -130,7 +210,9 @@ pub(crate) fn add_shape<'a>(
                     )?;
                 }
                 ctx.attached.push(key);
-                let radiance = ctx.color(t, "radiance")?.unwrap_or(Vec3::ONE);
+                let radiance = ctx
+                    .color_as(t, "radiance", super::SpectrumUse::Emission)?
+                    .unwrap_or(Vec3::ONE);
                 if !radiance.is_finite() || radiance.min_element() < 0.0 {
                     return Err(syntax(
                         t.loc_of("radiance"),
