@@ -1,7 +1,8 @@
 //! Locks the generated shaders: for every kernel variant, the WGSL and the SPIR-V
 //! disassembly (after `naga::compact`, so names are stable) are insta snapshots. Every
 //! snapshot is also checked: the SPIR-V passes `spirv-val` and the WGSL re-parses and
-//! re-validates through naga's own front end. (Executing them is the difftests' job.)
+//! re-validates through naga's own front end. (Executing them is the difftests' job; the
+//! renderer's kernels, locked here too, run in `cohort-render`'s tests.)
 
 use cohort_tests::variants;
 use std::process::Command;
@@ -68,6 +69,103 @@ fn every_variant_is_locked_and_valid() {
         );
         let built = (v.build)(&v.spec);
         let e = cohort::emit::emit(&built).unwrap_or_else(|e| panic!("{e}"));
+        reparse_wgsl(&v.name, &e.wgsl);
+        spirv_val(&v.name, &e.spirv);
+        insta::assert_snapshot!(format!("{}.wgsl", v.name), e.wgsl);
+        insta::assert_snapshot!(format!("{}.spvasm", v.name), disassemble(&e.spirv));
+    }
+}
+
+/// The renderer's own kernels (`cohort-kernels`), at the specialisations it dispatches:
+/// a change to the path tracer's generated code shows up in review like any other.
+fn renderer_variants() -> Vec<variants::Variant> {
+    use cohort::{Group, KernelInfo, Spec};
+    use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
+    use cohort_kernels::extend::{extend, init_paths};
+    use cohort_kernels::integrator::{Implicit, NextEvent};
+    use cohort_kernels::path_end::{EachPath, WholeGroup};
+    use cohort_kernels::sampling::{CoherentCosine, Cosine};
+    use cohort_kernels::traverse::{trace_shadow, traverse};
+    use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+    fn variant(
+        label: &str,
+        info: &KernelInfo,
+        group: Group,
+        build: fn(&Spec) -> cohort::ir::BuiltKernel,
+    ) -> variants::Variant {
+        let spec = Spec::portable(info, group);
+        variants::Variant {
+            name: format!("renderer_{label}__{}", spec.suffix()),
+            spec,
+            build,
+        }
+    }
+    vec![
+        variant(
+            "init_paths",
+            &init_paths::INFO,
+            Group::Thread,
+            init_paths::build,
+        ),
+        variant("traverse", &traverse::INFO, Group::Thread, traverse::build),
+        variant(
+            "traverse8",
+            &traverse8::INFO,
+            Group::Thread,
+            traverse8::build,
+        ),
+        variant(
+            "trace_shadow",
+            &trace_shadow::INFO,
+            Group::Thread,
+            trace_shadow::build,
+        ),
+        variant(
+            "trace_shadow8",
+            &trace_shadow8::INFO,
+            Group::Thread,
+            trace_shadow8::build,
+        ),
+        variant(
+            "compact_count",
+            &compact_count::INFO,
+            Group::Thread,
+            compact_count::build,
+        ),
+        variant(
+            "compact_offsets",
+            &compact_offsets::INFO,
+            Group::Thread,
+            compact_offsets::build,
+        ),
+        variant(
+            "compact_scatter",
+            &compact_scatter::INFO,
+            Group::Thread,
+            compact_scatter::build,
+        ),
+        // The default render (independent cosine sampling, light sampling) and the paper's
+        // coherent sampling with a whole-warp end, implicit paths.
+        variant(
+            "extend_cosine_nee",
+            &extend::INFO,
+            Group::Thread,
+            extend::build::<Cosine, EachPath, NextEvent>,
+        ),
+        variant(
+            "extend_coherent_wholegroup_path",
+            &extend::INFO,
+            Group::Warp,
+            extend::build::<CoherentCosine, WholeGroup, Implicit>,
+        ),
+    ]
+}
+
+#[test]
+fn renderer_kernels_are_locked_and_valid() {
+    for v in renderer_variants() {
+        let built = (v.build)(&v.spec);
+        let e = cohort::emit::emit(&built).unwrap_or_else(|e| panic!("{}: {e}", v.name));
         reparse_wgsl(&v.name, &e.wgsl);
         spirv_val(&v.name, &e.spirv);
         insta::assert_snapshot!(format!("{}.wgsl", v.name), e.wgsl);
