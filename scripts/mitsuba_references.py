@@ -146,6 +146,23 @@ SCENES = {
         </film>
     </sensor>""",
     ),
+    # A thin lens focused on the white cube, with an aperture wide enough to blur the
+    # back wall and the light.
+    "thinlens": scene(
+        "",
+        CEILING + AREA_LIGHT,
+        sensor="""<sensor type="thinlens">
+        <float name="fov" value="45"/>
+        <float name="aperture_radius" value="0.12"/>
+        <float name="focus_distance" value="3.7"/>
+        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",

@@ -31,20 +31,40 @@ pub fn film_offset(f: &Frame, pixel: u32, key: u32) -> Vec3 {
     f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)
 }
 
-/// Direction of the camera ray through film offset `film` (`film_offset`).
+/// A uniform point of a thin lens, as an offset from `cam_origin` (zero for a pinhole):
+/// uniform in the disk of radius `lens_radius` spanned by the film's axes. It uses the
+/// camera vertex's random dimensions 2 and 3 (0 and 1 place the film point).
 #[kernel_fn]
-pub fn camera_dir(f: &Frame, film: Vec3) -> Vec3 {
+pub fn lens_offset(f: &Frame, key: u32) -> Vec3 {
+    let mut offset = Vec3::ZERO;
+    if f.lens_radius > 0.0 {
+        let r = f.lens_radius * uniform(key, 2).sqrt();
+        let phi = 2.0 * core::f32::consts::PI * uniform(key, 3);
+        offset = f.cam_right.normalize() * (r * phi.cos()) + f.cam_up.normalize() * (r * phi.sin());
+    }
+    offset
+}
+
+/// Direction of the camera ray through film offset `film` (`film_offset`) and lens offset
+/// `lens` (`lens_offset`): along the view axis (orthographic), through the film (pinhole),
+/// or from the lens point to where the film ray meets the plane of focus (thin lens), as
+/// `cohort_scenes::Camera::ray_through_lens`.
+#[kernel_fn]
+pub fn camera_dir(f: &Frame, film: Vec3, lens: Vec3) -> Vec3 {
     let mut d = f.cam_forward;
     if f.orthographic == 0 {
         d += film;
+        if f.lens_radius > 0.0 {
+            d = d * f.focus_distance - lens;
+        }
     }
     d.normalize()
 }
 
-/// Origin of the camera ray through film offset `film` (`film_offset`).
+/// Origin of the camera ray through film offset `film` and lens offset `lens`.
 #[kernel_fn]
-pub fn camera_origin(f: &Frame, film: Vec3) -> Vec3 {
-    let mut o = f.cam_origin;
+pub fn camera_origin(f: &Frame, film: Vec3, lens: Vec3) -> Vec3 {
+    let mut o = f.cam_origin + lens;
     if f.orthographic != 0 {
         o += film;
     }
@@ -74,9 +94,11 @@ pub fn init_paths(
         return;
     }
     let pixel = slot_pixel[g];
-    let film = film_offset(f, pixel, stream(f.seed, pixel, f.first_path, 0));
-    let o = camera_origin(f, film);
-    let d = camera_dir(f, film);
+    let key = stream(f.seed, pixel, f.first_path, 0);
+    let film = film_offset(f, pixel, key);
+    let lens = lens_offset(f, key);
+    let o = camera_origin(f, film, lens);
+    let d = camera_dir(f, film, lens);
     idrays[g] = gi;
     state[g] = UVec4::new(pixel, f.first_path, 0, 0);
     ray_o[g] = Vec4::new(o.x, o.y, o.z, 0.0);
@@ -449,10 +471,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 done = DONE;
                 wg_done[1].fetch_add(1, Ordering::Relaxed);
             }
-            let film = film_offset(f, pixel, stream(f.seed, pixel, next, 0));
+            let key = stream(f.seed, pixel, next, 0);
+            let film = film_offset(f, pixel, key);
+            let lens = lens_offset(f, key);
             state[r] = UVec4::new(pixel, next, 0, done);
-            ray_o[r] = camera_origin(f, film).extend(0.0);
-            ray_d[r] = camera_dir(f, film).extend(0.0);
+            ray_o[r] = camera_origin(f, film, lens).extend(0.0);
+            ray_d[r] = camera_dir(f, film, lens).extend(0.0);
             beta[r] = CAMERA_BETA;
             flags[i] = 0;
         }

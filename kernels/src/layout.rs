@@ -126,6 +126,12 @@ pub struct Frame {
     /// 1: orthographic camera: camera rays start at `cam_origin` moved across the film by
     /// `cam_right` and `cam_up`, all along `cam_forward` (`cohort_scenes::CameraFrame`).
     pub orthographic: u32,
+    /// Thin-lens camera (0: a pinhole): rays start on the disk of this radius around
+    /// `cam_origin` (spanned by `cam_right`, `cam_up`) and meet at `focus_distance`.
+    pub lens_radius: f32,
+    pub focus_distance: f32,
+    pub pad4: u32,
+    pub pad5: u32,
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`

@@ -420,6 +420,8 @@ impl<'d> Renderer<'d> {
             slots: n as u32,
             cam_up: f.up,
             orthographic: f.orthographic as u32,
+            lens_radius: f.lens_radius,
+            focus_distance: f.focus_distance,
             environment: scene.environment,
             max_depth,
             zero_depth,

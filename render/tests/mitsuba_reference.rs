@@ -248,3 +248,8 @@ fn instances_of_a_shapegroup_with_a_sampled_spectrum() {
 fn orthographic_sensor() {
     check("orthographic");
 }
+
+#[test]
+fn thinlens_sensor() {
+    check("thinlens");
+}

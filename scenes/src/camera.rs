@@ -2,7 +2,7 @@
 //! `hdrfilm`), and the small frame the renderer's camera-ray kernel needs. Sources build it from a
 //! `to_world` transform; the renderer reads [`Camera::frame`].
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 /// Which image extent `fov` spans (Mitsuba's `fov_axis`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +60,10 @@ pub struct Camera {
     pub near_clip: f32,
     pub far_clip: f32,
     pub projection: Projection,
+    /// Mitsuba `thinlens`: radius of the lens aperture in world units (0: a pinhole). Rays
+    /// start on the lens disk and meet at `focus_distance` along the view axis.
+    pub aperture_radius: f32,
+    pub focus_distance: f32,
 }
 
 /// What a camera-ray kernel needs: the direction for film coordinates `(sx, sy)` in `[0,1]^2`
@@ -75,6 +79,11 @@ pub struct CameraFrame {
     pub right: Vec3,
     pub up: Vec3,
     pub orthographic: bool,
+    /// Thin lens (perspective only): rays start at `origin` plus a uniform point of the
+    /// disk of this radius spanned by `right` and `up`, and pass through `origin + (forward
+    /// + film) * focus_distance`.
+    pub lens_radius: f32,
+    pub focus_distance: f32,
 }
 
 impl Camera {
@@ -98,6 +107,8 @@ impl Camera {
             near_clip: 1e-2,
             far_clip: 1e4,
             projection: Projection::Perspective,
+            aperture_radius: 0.0,
+            focus_distance: 1e4,
         })
     }
 
@@ -165,6 +176,8 @@ impl Camera {
                     .to_world
                     .transform_vector3(Vec3::new(0.0, 1.0 / self.aspect(), 0.0)),
                 orthographic: true,
+                lens_radius: 0.0,
+                focus_distance: 0.0,
             };
         }
         let (tx, ty) = self.tan_half_fov();
@@ -175,18 +188,34 @@ impl Camera {
             right: self.to_world.transform_vector3(Vec3::new(-tx, 0.0, 0.0)),
             up: self.to_world.transform_vector3(Vec3::new(0.0, ty, 0.0)),
             orthographic: false,
+            lens_radius: self.aperture_radius,
+            focus_distance: self.focus_distance,
         }
     }
 
-    /// The ray (origin, unit direction) through film point `(sx, sy)` in `[0,1]^2` (y down).
+    /// The ray (origin, unit direction) through film point `(sx, sy)` in `[0,1]^2` (y down),
+    /// through the centre of a thin lens.
     pub fn ray(&self, sx: f32, sy: f32) -> (Vec3, Vec3) {
+        self.ray_through_lens(sx, sy, Vec2::ZERO)
+    }
+
+    /// The ray through film point `(sx, sy)` and the point `lens` of the unit disk (camera
+    /// space x, y) scaled to the aperture (thin lens; ignored by pinhole and orthographic
+    /// cameras). The kernel
+    /// `cohort_kernels::extend::camera_dir` computes the same.
+    pub fn ray_through_lens(&self, sx: f32, sy: f32, lens: Vec2) -> (Vec3, Vec3) {
         let f = self.frame();
         let film = (2.0 * sx - 1.0) * f.right + (1.0 - 2.0 * sy) * f.up;
         if f.orthographic {
-            (f.origin + film, f.forward.normalize())
-        } else {
-            (f.origin, (f.forward + film).normalize())
+            return (f.origin + film, f.forward.normalize());
         }
+        if f.lens_radius <= 0.0 {
+            return (f.origin, (f.forward + film).normalize());
+        }
+        // Mitsuba's aperture point (x, y, 0) is in camera space, whose x points left.
+        let offset = f.lens_radius * (lens.y * f.up.normalize() - lens.x * f.right.normalize());
+        let focus = (f.forward + film) * f.focus_distance;
+        (f.origin + offset, (focus - offset).normalize())
     }
 
     /// Unit world direction through film point `(sx, sy)` in `[0,1]^2` (y down).

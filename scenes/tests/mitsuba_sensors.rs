@@ -60,3 +60,55 @@ fn orthographic_sensor_parameters() {
     let e = load_mitsuba_str(xml, ".").unwrap_err().to_string();
     assert!(e.contains("fov") && e.contains(":2:"), "{e}");
 }
+
+#[test]
+fn thinlens_rays_are_mitsubas() {
+    // mi.load_dict({'type': 'thinlens', 'aperture_radius': 0.2, 'focus_distance': 3,
+    // 'fov': 40, film 32 x 32}).sample_ray(0, 0.5, (0.5, 0.5), aperture): the aperture
+    // samples (0, 0.5) and (1, 1) map (concentrically) to the disk points (-1, 0) and
+    // (sqrt(1/2), sqrt(1/2)). Mitsuba starts rays at the near clip plane (0.01): our origin
+    // is that ray's point at z = 0.
+    let c = sensor(
+        r#"<sensor type="thinlens"><float name="aperture_radius" value="0.2"/><float name="focus_distance" value="3"/><float name="fov" value="40"/>"#,
+        32,
+        32,
+    );
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    for (lens, mitsuba_o, mitsuba_d) in [
+        (
+            glam::Vec2::new(-1.0, 0.0),
+            Vec3::new(-0.199333, 0.0, 0.01),
+            Vec3::new(0.066519, 0.0, 0.997785),
+        ),
+        (
+            glam::Vec2::new(h, h),
+            Vec3::new(0.14095, 0.14095, 0.01),
+            Vec3::new(-0.047036, -0.047036, 0.997785),
+        ),
+    ] {
+        let (o, d) = c.ray_through_lens(0.5, 0.5, lens);
+        let at_z0 = mitsuba_o - mitsuba_d * (mitsuba_o.z / mitsuba_d.z);
+        assert!(
+            (o - at_z0).abs().max_element() < 1e-4,
+            "origin {o} vs {at_z0}"
+        );
+        assert!(
+            (d - mitsuba_d).abs().max_element() < 1e-5,
+            "direction {d} vs {mitsuba_d}"
+        );
+    }
+    // Mitsuba requires an aperture radius and focuses at the far clip plane by default.
+    let e = load_mitsuba_str(
+        r#"<scene version="3.0.0"><integrator type="path"/><sensor type="thinlens"/></scene>"#,
+        ".",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("aperture_radius"), "{e}");
+    let c = sensor(
+        r#"<sensor type="thinlens"><float name="aperture_radius" value="0.1"/>"#,
+        8,
+        8,
+    );
+    assert_eq!(c.focus_distance, 1e4);
+}

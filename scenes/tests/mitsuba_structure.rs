@@ -636,9 +636,9 @@ fn unsupported_plugins_strict_and_lenient() {
             "ignored",
         ),
         (
-            r#"<sensor type="thinlens"><float name="aperture_radius" value="0.1"/></sensor>"#,
-            "thinlens",
-            "pinhole",
+            r#"<sensor type="irradiancemeter"/>"#,
+            "sensor 'irradiancemeter'",
+            "perspective camera",
         ),
         (
             r#"<sensor type="radiancemeter"/>"#,

@@ -340,6 +340,8 @@ fn default_camera() -> Camera {
         near_clip: 1e-2,
         far_clip: 1e4,
         projection: Projection::Perspective,
+        aperture_radius: 0.0,
+        focus_distance: 1e4,
     }
 }
 
@@ -368,13 +370,42 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
             ));
         }
         "thinlens" => {
-            ctx.diag.unsupported(
-                &obj.loc,
-                "sensor 'thinlens' (depth of field) is not supported by the renderer",
-                "rendered as a pinhole perspective camera",
-            )?;
-            obj.ignore("aperture_radius");
-            obj.ignore("focus_distance");
+            let camera = read_perspective(ctx, obj)?;
+            let Some(aperture_radius) = obj.float("aperture_radius")? else {
+                return Err(syntax(
+                    &obj.loc,
+                    "sensor 'thinlens' needs an 'aperture_radius' (as in Mitsuba)",
+                ));
+            };
+            // Mitsuba focuses at the far clip plane unless told otherwise.
+            let focus_distance = obj.float("focus_distance")?.unwrap_or(camera.far_clip);
+            if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+                return Err(syntax(
+                    obj.loc_of("aperture_radius"),
+                    "aperture_radius must be finite and >= 0",
+                ));
+            }
+            if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+                return Err(syntax(
+                    obj.loc_of("focus_distance"),
+                    "focus_distance must be finite and positive",
+                ));
+            }
+            obj.ignore("shutter_open");
+            obj.ignore("shutter_close");
+            obj.ignore("srf");
+            let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+            obj.finish(&mut ctx.diag)?;
+            return Ok((
+                Camera {
+                    width,
+                    height,
+                    aperture_radius,
+                    focus_distance,
+                    ..camera
+                },
+                spp,
+            ));
         }
         other => {
             ctx.diag.unsupported(
@@ -478,6 +509,8 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
         near_clip,
         far_clip,
         projection: Projection::Perspective,
+        aperture_radius: 0.0,
+        focus_distance: 1e4,
     })
 }
 
