@@ -163,6 +163,26 @@ SCENES = {
         </film>
     </sensor>""",
     ),
+    # Plastic: a cube with Mitsuba's defaults but its colour, and a nonlinear slab of
+    # another index on the floor, lit by the area light and a sky.
+    "plastic": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.15, 0.15, 0.2"/></emitter>'
+        + """<shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="-20"/><translate x="-0.4" y="0.25" z="0.1"/></transform>
+        <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.3, 0.6"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale x="0.5" y="0.01" z="0.4"/><translate y="0.01" z="0.45"/></transform>
+        <bsdf type="plastic">
+            <rgb name="diffuse_reflectance" value="0.7, 0.2, 0.1"/>
+            <float name="int_ior" value="1.9"/>
+            <boolean name="nonlinear" value="true"/>
+        </bsdf>
+    </shape>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",

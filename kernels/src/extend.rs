@@ -16,7 +16,8 @@ use crate::light::{
 use crate::path_end::PathEnd;
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{
-    cell_point, fresnel_dielectric, ggx_eval, ggx_vndf, smith_g1, DiffuseSampler,
+    cell_point, fresnel_dielectric, ggx_eval, ggx_vndf, plastic_base, plastic_specular_probability,
+    smith_g1, DiffuseSampler,
 };
 use cohort::prelude::*;
 
@@ -264,11 +265,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let diffuse =
                     m.kind == DIFFUSE && (front || two_sided) && m.color.max_element() > 0.0;
                 let glossy = m.kind == ROUGH_CONDUCTOR;
+                let plastic = m.kind == PLASTIC && (front || two_sided);
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse || glossy)
+                    if (diffuse || glossy || plastic)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -334,6 +336,21 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 let c = wi.dot(n).max(0.0);
                                 fc = m.color * (c * core::f32::consts::FRAC_1_PI);
                                 pdf_b = c * core::f32::consts::FRAC_1_PI;
+                            } else if plastic {
+                                // The coating's delta reflection cannot meet a light sample:
+                                // only the base scatters towards it.
+                                let c = wi.dot(n).max(0.0);
+                                let f_i = fresnel_dielectric(-d.dot(n), m.param);
+                                let f_o = fresnel_dielectric(c, m.param);
+                                let p_spec =
+                                    plastic_specular_probability(f_i, m.color, m.transmittance);
+                                let base = plastic_base(m.color, m.param, m.flags & NONLINEAR != 0);
+                                fc = base
+                                    * ((1.0 - f_i)
+                                        * (1.0 - f_o)
+                                        * c
+                                        * core::f32::consts::FRAC_1_PI);
+                                pdf_b = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
                             } else {
                                 let fr = crate::sampling::frame(n);
                                 let e = ggx_eval(fr.transpose() * -d, fr.transpose() * wi, m.param);
@@ -369,6 +386,28 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     let c = new_d.dot(n).max(0.0);
                     bsdf_pdf = c * core::f32::consts::FRAC_1_PI;
                     env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
+                } else if plastic {
+                    // Mitsuba `plastic`: the coating's specular reflection or the base's
+                    // diffuse scattering, chosen by their Fresnel-weighted mean albedos.
+                    let cos_i = -d.dot(n);
+                    let f_i = fresnel_dielectric(cos_i, m.param);
+                    let p_spec = plastic_specular_probability(f_i, m.color, m.transmittance);
+                    if uniform(key, 4) < p_spec {
+                        new_d = d + n * (2.0 * cos_i);
+                        thr = thr * m.transmittance * (f_i / p_spec);
+                    } else {
+                        let s = S::sample(n, u, shared_patch, f.patches_n);
+                        new_d = s.truncate();
+                        let c = new_d.dot(n).max(0.0);
+                        let f_o = fresnel_dielectric(c, m.param);
+                        let base = plastic_base(m.color, m.param, m.flags & NONLINEAR != 0);
+                        thr = thr * base * ((1.0 - f_i) * (1.0 - f_o) / (1.0 - p_spec) * s.w);
+                        // As for diffuse bounces: cosine densities whatever S drew.
+                        bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
+                        env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
+                    }
+                    new_o = offset_origin(p, n);
+                    alive = true;
                 } else if m.kind == CONDUCTOR {
                     new_d = d - n * (2.0 * d.dot(n));
                     thr = thr * m.color;
@@ -393,7 +432,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         bsdf_pdf = ggx_eval(wo, wi, m.param).y;
                         env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
                     }
-                } else {
+                } else if m.kind == DIELECTRIC {
                     // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
                     let eta = if front { m.param } else { 1.0 / m.param };
                     let cos_i = -d.dot(n);
@@ -411,6 +450,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                     alive = true;
                 }
+                // Anything else absorbs: a black or back-facing one-sided surface (diffuse,
+                // plastic), whose BSDF is zero there, as in Mitsuba. The path ends here.
                 if alive && !pass_through && f.max_depth != 0 && bounce + 1 >= f.max_depth {
                     alive = false;
                 }

@@ -39,20 +39,24 @@ pub const DIFFUSE: u32 = 0;
 pub const CONDUCTOR: u32 = 1;
 pub const ROUGH_CONDUCTOR: u32 = 2;
 pub const DIELECTRIC: u32 = 3;
+/// Mitsuba `plastic`: `color` diffuse, `transmittance` specular reflectance, `param` eta.
+pub const PLASTIC: u32 = 4;
 /// `Material::flags` bits.
 pub const TWO_SIDED: u32 = 1;
 pub const EMITTER: u32 = 2;
+/// Plastic: Mitsuba's `nonlinear` (internal scattering shifts the base's colour).
+pub const NONLINEAR: u32 = 4;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
 pub struct Material {
-    /// Diffuse reflectance, or specular reflectance.
+    /// Diffuse reflectance (diffuse, plastic), or specular reflectance.
     pub color: Vec3,
     pub kind: u32,
     pub emission: Vec3,
     pub flags: u32,
     pub transmittance: Vec3,
-    /// GGX alpha (rough conductor) or int_ior / ext_ior (dielectric).
+    /// GGX alpha (rough conductor) or int_ior / ext_ior (dielectric, plastic).
     pub param: f32,
 }
 

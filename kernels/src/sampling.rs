@@ -250,3 +250,45 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
         0.5 * (rs * rs + rp * rp)
     }
 }
+
+/// Mitsuba's fit of the hemispherical average of the Fresnel reflectance for relative index
+/// `eta` (`fresnel_diffuse_reflectance`: Egan and Hilgeman 1973 below 1, d'Eon and Irving
+/// 2011 above), which its `plastic` uses for light reflected back into the coating.
+#[kernel_fn]
+pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
+    let inv = 1.0 / eta;
+    if eta < 1.0 {
+        0.0636 * inv + eta * (eta * -1.4399 + 0.7099) + 0.6681
+    } else {
+        let inv2 = inv * inv;
+        let inv3 = inv2 * inv;
+        0.919317 - 3.4793 * inv + 6.75335 * inv2 - 7.80989 * inv3 + 4.98554 * inv3 * inv
+            - 1.36881 * inv3 * inv2
+    }
+}
+
+/// Mitsuba `plastic`: the probability of sampling the coating's specular reflection for an
+/// incident Fresnel reflectance `f_i`, from the lobes' mean albedos (the diffuse lobe takes
+/// the rest).
+#[kernel_fn]
+pub fn plastic_specular_probability(f_i: f32, diffuse: Vec3, specular: Vec3) -> f32 {
+    let d_mean = (diffuse.x + diffuse.y + diffuse.z) / 3.0;
+    let s_mean = (specular.x + specular.y + specular.z) / 3.0;
+    let weight = s_mean / (d_mean + s_mean);
+    let ps = f_i * weight;
+    let pd = (1.0 - f_i) * (1.0 - weight);
+    ps / (ps + pd)
+}
+
+/// Mitsuba `plastic`'s diffuse lobe without the cosine and the Fresnel transmissions: the
+/// base's albedo over (1 - the internal reflections), scaled by 1 / eta^2 (radiance
+/// compression on entering, expansion on leaving).
+#[kernel_fn]
+pub fn plastic_base(diffuse: Vec3, eta: f32, nonlinear: bool) -> Vec3 {
+    let fdr_int = fresnel_diffuse_reflectance(1.0 / eta);
+    let mut denominator = Vec3::splat(1.0 - fdr_int);
+    if nonlinear {
+        denominator = Vec3::ONE - diffuse * fdr_int;
+    }
+    diffuse / denominator / (eta * eta)
+}

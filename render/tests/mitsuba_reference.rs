@@ -253,3 +253,8 @@ fn orthographic_sensor() {
 fn thinlens_sensor() {
     check("thinlens");
 }
+
+#[test]
+fn plastic_bsdf() {
+    check("plastic");
+}

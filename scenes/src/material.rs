@@ -24,6 +24,16 @@ pub enum Bsdf {
         specular_reflectance: Vec3,
         specular_transmittance: Vec3,
     },
+    /// Mitsuba `plastic`: a diffuse base under a smooth dielectric coating of relative index
+    /// `eta` (int/ext); light reflects off the coating (Fresnel, times
+    /// `specular_reflectance`) or enters, scatters in the base and leaves, with the internal
+    /// reflections Mitsuba accounts for (`nonlinear`: also the base's colour shift). One-sided.
+    Plastic {
+        eta: f32,
+        diffuse_reflectance: Vec3,
+        specular_reflectance: Vec3,
+        nonlinear: bool,
+    },
 }
 
 /// A BSDF plus, optionally, an area emitter on the same surface.
@@ -100,6 +110,7 @@ impl Material {
     }
 
     pub fn to_gpu(&self) -> GpuMaterial {
+        let mut flags = 0;
         let (kind, color, transmittance, param) = match self.bsdf {
             Bsdf::Diffuse { reflectance } => (GpuMaterial::DIFFUSE, reflectance, Vec3::ZERO, 0.0),
             Bsdf::Conductor {
@@ -130,8 +141,23 @@ impl Material {
                 specular_transmittance,
                 int_ior / ext_ior,
             ),
+            Bsdf::Plastic {
+                eta,
+                diffuse_reflectance,
+                specular_reflectance,
+                nonlinear,
+            } => {
+                if nonlinear {
+                    flags |= GpuMaterial::FLAG_NONLINEAR;
+                }
+                (
+                    GpuMaterial::PLASTIC,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    eta,
+                )
+            }
         };
-        let mut flags = 0;
         if self.two_sided {
             flags |= GpuMaterial::FLAG_TWO_SIDED;
         }
@@ -154,12 +180,12 @@ impl Material {
 ///
 /// | offset | field | meaning |
 /// |---|---|---|
-/// | 0 | `color: [f32;3]` | diffuse reflectance, or specular reflectance (conductors, dielectric) |
-/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3 |
+/// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
+/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter |
-/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, else zero |
-/// | 44 | `param: f32` | GGX alpha (rough conductor) or relative IOR int/ext (dielectric) |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic) |
+/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, else zero |
+/// | 44 | `param: f32` | GGX alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -176,8 +202,10 @@ impl GpuMaterial {
     pub const CONDUCTOR: u32 = 1;
     pub const ROUGH_CONDUCTOR: u32 = 2;
     pub const DIELECTRIC: u32 = 3;
+    pub const PLASTIC: u32 = 4;
     pub const FLAG_TWO_SIDED: u32 = 1;
     pub const FLAG_EMITTER: u32 = 2;
+    pub const FLAG_NONLINEAR: u32 = 4;
 }
 
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 48);

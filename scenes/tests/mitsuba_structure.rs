@@ -616,8 +616,8 @@ fn unsupported_plugins_strict_and_lenient() {
             "skipped",
         ),
         (
-            r#"<shape type="rectangle"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
-            "bsdf 'plastic'",
+            r#"<shape type="rectangle"><bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
+            "bsdf 'roughplastic'",
             "diffuse [0.2, 0.4, 0.6]",
         ),
         (

@@ -18,6 +18,7 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "conductor",
     "roughconductor",
     "dielectric",
+    "plastic",
     "twosided",
 ];
 
@@ -195,6 +196,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             }
         }
         "dielectric" => dielectric(ctx, obj)?,
+        "plastic" => plastic(ctx, obj)?,
         "twosided" => return twosided(ctx, obj),
         _ => return stand_in(ctx, obj),
     };
@@ -218,6 +220,33 @@ fn dielectric<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
         specular_transmittance: ctx
             .color(obj, "specular_transmittance")?
             .unwrap_or(Vec3::ONE),
+    })
+}
+
+/// Mitsuba `plastic`: a diffuse base under a smooth dielectric coating (defaults: diffuse
+/// 0.5, specular 1, polypropylene in air, linear).
+fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
+    let int_ior = ior(obj, "int_ior", 1.49)?;
+    let ext_ior = ior(obj, "ext_ior", 1.000277)?;
+    if !(int_ior > 0.0 && ext_ior > 0.0) {
+        return Err(syntax(&obj.loc, "indices of refraction must be positive"));
+    }
+    let diffuse_reflectance = ctx
+        .color(obj, "diffuse_reflectance")?
+        .unwrap_or(Vec3::splat(0.5));
+    let specular_reflectance = ctx.color(obj, "specular_reflectance")?.unwrap_or(Vec3::ONE);
+    if diffuse_reflectance.max_element() + specular_reflectance.max_element() <= 0.0 {
+        // Mitsuba samples the coating by the ratio of the two means, undefined at 0 / 0.
+        return Err(syntax(
+            &obj.loc,
+            "plastic needs a non-zero diffuse_reflectance or specular_reflectance",
+        ));
+    }
+    Ok(Bsdf::Plastic {
+        eta: int_ior / ext_ior,
+        diffuse_reflectance,
+        specular_reflectance,
+        nonlinear: obj.boolean("nonlinear")?.unwrap_or(false),
     })
 }
 
