@@ -183,6 +183,22 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # A 32 x 32 crop window of a 64 x 48 film: the field of view and aspect are the film's.
+    "crop": scene(
+        "",
+        CEILING + AREA_LIGHT,
+        sensor="""<sensor type="perspective">
+        <float name="fov" value="50"/>
+        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="64"/><integer name="height" value="48"/>
+            <integer name="crop_offset_x" value="22"/><integer name="crop_offset_y" value="4"/>
+            <integer name="crop_width" value="32"/><integer name="crop_height" value="32"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",

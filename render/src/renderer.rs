@@ -397,8 +397,8 @@ impl<'d> Renderer<'d> {
             if w == 0 || h == 0 {
                 return Err(RenderError::Options(format!("image size {w}x{h} is empty")));
             }
-            camera.width = w;
-            camera.height = h;
+            // The whole film at that size, unless it is the scene's own (crop) size.
+            camera = camera.with_size(w, h);
         }
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;

@@ -258,3 +258,8 @@ fn thinlens_sensor() {
 fn plastic_bsdf() {
     check("plastic");
 }
+
+#[test]
+fn film_crop_window() {
+    check("crop");
+}

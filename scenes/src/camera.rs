@@ -64,6 +64,18 @@ pub struct Camera {
     /// start on the lens disk and meet at `focus_distance` along the view axis.
     pub aperture_radius: f32,
     pub focus_distance: f32,
+    /// Mitsuba's film crop window: only this part of a larger film is rendered, and
+    /// `width` x `height` is its size (the field of view and the aspect are the film's).
+    pub crop: Option<CropWindow>,
+}
+
+/// The position of the rendered rectangle in the full film, in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CropWindow {
+    pub film_width: u32,
+    pub film_height: u32,
+    pub offset_x: u32,
+    pub offset_y: u32,
 }
 
 /// What a camera-ray kernel needs: the direction for film coordinates `(sx, sy)` in `[0,1]^2`
@@ -109,6 +121,7 @@ impl Camera {
             projection: Projection::Perspective,
             aperture_radius: 0.0,
             focus_distance: 1e4,
+            crop: None,
         })
     }
 
@@ -125,8 +138,23 @@ impl Camera {
         self.to_world.transform_vector3(Vec3::Y).normalize()
     }
 
+    /// The aspect ratio of the whole film (of which a crop window renders a part).
     pub fn aspect(&self) -> f32 {
-        self.width as f32 / self.height as f32
+        match self.crop {
+            Some(c) => c.film_width as f32 / c.film_height as f32,
+            None => self.width as f32 / self.height as f32,
+        }
+    }
+
+    /// This camera rendering `width` x `height` pixels: the same camera where that is its
+    /// size, else its whole film at that size (a crop window is dropped).
+    pub fn with_size(mut self, width: u32, height: u32) -> Camera {
+        if (width, height) != (self.width, self.height) {
+            self.crop = None;
+            self.width = width;
+            self.height = height;
+        }
+        self
     }
 
     /// The horizontal full field of view in degrees, converted from `fov` / `fov_axis` exactly as
@@ -163,7 +191,28 @@ impl Camera {
         (tx, tx / self.aspect())
     }
 
+    /// The frame of the rendered pixels: the whole film's, narrowed to the crop window.
     pub fn frame(&self) -> CameraFrame {
+        let mut f = self.film_frame();
+        if let Some(c) = self.crop {
+            // A rendered pixel (px, py) of w x h is film pixel (ox + px, oy + py) of W x H:
+            // the film offset 2 sx - 1 becomes (2 px / w - 1) w / W + (2 ox + w) / W - 1.
+            let (w, h) = (self.width as f32, self.height as f32);
+            let (fw, fh) = (c.film_width as f32, c.film_height as f32);
+            let shift = f.right * ((2.0 * c.offset_x as f32 + w) / fw - 1.0)
+                + f.up * (1.0 - (2.0 * c.offset_y as f32 + h) / fh);
+            if f.orthographic {
+                f.origin += shift;
+            } else {
+                f.forward += shift;
+            }
+            f.right *= w / fw;
+            f.up *= h / fh;
+        }
+        f
+    }
+
+    fn film_frame(&self) -> CameraFrame {
         if self.projection == Projection::Orthographic {
             // Camera x points left, so image-right is -x; rays start on the near-clip plane.
             return CameraFrame {

@@ -33,7 +33,7 @@ pub use bvh::{
     GpuBvhNode, GpuTriangle, Hit,
 };
 pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhError};
-pub use camera::{Camera, CameraFrame, FovAxis, Projection};
+pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use material::{Bsdf, GpuMaterial, Material};
 pub use mesh::TriMesh;

@@ -297,7 +297,10 @@ fn unsupported_features_warn_with_file_and_line() {
         );
     };
     warned_at(r#"type="sdfgrid""#, "shape 'sdfgrid' is not supported");
-    warned_at(r#"type="roughplastic""#, "bsdf 'roughplastic' is not supported");
+    warned_at(
+        r#"type="roughplastic""#,
+        "bsdf 'roughplastic' is not supported",
+    );
     warned_at("roughness", "'roughness'");
     warned_at("envmap", "emitter 'envmap' is not supported");
     warned_at("roughconductor", "beckmann");

@@ -112,3 +112,50 @@ fn thinlens_rays_are_mitsubas() {
     );
     assert_eq!(c.focus_distance, 1e4);
 }
+
+#[test]
+fn crop_windows_render_part_of_the_film_as_mitsuba() {
+    // Film 64 x 48, crop 32 x 32 at (22, 4); Mitsuba's sample_ray maps [0, 1]^2 onto the
+    // crop window (its default camera: at the origin looking down +z, camera x left).
+    let film = r#"<film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>
+<integer name="crop_offset_x" value="22"/><integer name="crop_offset_y" value="4"/>
+<integer name="crop_width" value="32"/><integer name="crop_height" value="32"/></film>"#;
+    let load = |sensor: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="path"/>{sensor}{film}</sensor></scene>"#
+        );
+        load_mitsuba_str(&xml, ".")
+            .unwrap_or_else(|e| panic!("{e}"))
+            .scene
+            .camera
+    };
+    let c = load(r#"<sensor type="perspective"><float name="fov" value="50"/>"#);
+    assert_eq!((c.width, c.height), (32, 32));
+    for (film_point, mitsuba_d) in [
+        ((0.0, 0.0), Vec3::new(0.138551, 0.277103, 0.950798)),
+        ((1.0, 1.0), Vec3::new(-0.301136, -0.164256, 0.939328)),
+        ((0.5, 0.5), Vec3::new(-0.0869539, 0.0579693, 0.994524)),
+    ] {
+        let d = c.ray_direction(film_point.0, film_point.1);
+        assert!(
+            close(d, mitsuba_d),
+            "{film_point:?}: {d} vs Mitsuba's {mitsuba_d}"
+        );
+    }
+    let c = load(r#"<sensor type="orthographic">"#);
+    for (film_point, mitsuba_o) in [
+        ((0.0, 0.0), Vec3::new(0.3125, 0.625, 0.01)),
+        ((1.0, 1.0), Vec3::new(-0.6875, -0.375, 0.01)),
+    ] {
+        let (o, _) = c.ray(film_point.0, film_point.1);
+        assert!(
+            close(o, mitsuba_o),
+            "{film_point:?}: {o} vs Mitsuba's {mitsuba_o}"
+        );
+    }
+    // A window that leaves the film is a located error.
+    let xml = r#"<scene version="3.0.0"><integrator type="path"/><sensor type="perspective">
+<film type="hdrfilm"><integer name="width" value="8"/><integer name="crop_offset_x" value="4"/><integer name="crop_width" value="8"/></film></sensor></scene>"#;
+    let e = load_mitsuba_str(xml, ".").unwrap_err().to_string();
+    assert!(e.contains("crop window") && e.contains(":2:"), "{e}");
+}

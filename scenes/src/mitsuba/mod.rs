@@ -34,7 +34,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 use crate::builder::SceneBuilder;
-use crate::camera::{Camera, FovAxis, Projection};
+use crate::camera::{Camera, CropWindow, FovAxis, Projection};
 use crate::error::{SceneError, Warning};
 use crate::scene::{Integrator, Scene};
 
@@ -342,6 +342,7 @@ fn default_camera() -> Camera {
         projection: Projection::Perspective,
         aperture_radius: 0.0,
         focus_distance: 1e4,
+        crop: None,
     }
 }
 
@@ -358,12 +359,18 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
             obj.ignore("shutter_open");
             obj.ignore("shutter_close");
             obj.ignore("srf");
-            let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+            let FilmAndSampler {
+                width,
+                height,
+                spp,
+                crop,
+            } = read_film_and_sampler(ctx, obj, false)?;
             obj.finish(&mut ctx.diag)?;
             return Ok((
                 Camera {
                     width,
                     height,
+                    crop,
                     ..camera
                 },
                 spp,
@@ -394,12 +401,18 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
             obj.ignore("shutter_open");
             obj.ignore("shutter_close");
             obj.ignore("srf");
-            let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+            let FilmAndSampler {
+                width,
+                height,
+                spp,
+                crop,
+            } = read_film_and_sampler(ctx, obj, false)?;
             obj.finish(&mut ctx.diag)?;
             return Ok((
                 Camera {
                     width,
                     height,
+                    crop,
                     aperture_radius,
                     focus_distance,
                     ..camera
@@ -415,14 +428,15 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
             )?;
             // Read what a perspective camera would; the rest is the unsupported plugin's.
             let camera = read_perspective(ctx, obj)?;
-            let (w, h, spp) = read_film_and_sampler(ctx, obj, true)?;
+            let film = read_film_and_sampler(ctx, obj, true)?;
             return Ok((
                 Camera {
-                    width: w,
-                    height: h,
+                    width: film.width,
+                    height: film.height,
+                    crop: film.crop,
                     ..camera
                 },
-                spp,
+                film.spp,
             ));
         }
     }
@@ -439,12 +453,18 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
     obj.ignore("shutter_open");
     obj.ignore("shutter_close");
     obj.ignore("srf");
-    let (width, height, spp) = read_film_and_sampler(ctx, obj, false)?;
+    let FilmAndSampler {
+        width,
+        height,
+        spp,
+        crop,
+    } = read_film_and_sampler(ctx, obj, false)?;
     obj.finish(&mut ctx.diag)?;
     Ok((
         Camera {
             width,
             height,
+            crop,
             ..camera
         },
         spp,
@@ -511,6 +531,7 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
         projection: Projection::Perspective,
         aperture_radius: 0.0,
         focus_distance: 1e4,
+        crop: None,
     })
 }
 
@@ -548,8 +569,9 @@ fn read_film_and_sampler<'a>(
     ctx: &mut Ctx<'a>,
     obj: &'a Obj,
     quiet: bool,
-) -> Result<(u32, u32, u32), SceneError> {
+) -> Result<FilmAndSampler, SceneError> {
     let (mut width, mut height, mut spp) = (768, 576, 4);
+    let mut crop = None;
     let mut saw_film = false;
     for child in &obj.children {
         let c = ctx.target(child)?;
@@ -571,20 +593,7 @@ fn read_film_and_sampler<'a>(
                         })?;
                     }
                 }
-                if [
-                    "crop_offset_x",
-                    "crop_offset_y",
-                    "crop_width",
-                    "crop_height",
-                ]
-                .iter()
-                .any(|n| c.has(n))
-                {
-                    ctx.diag.warn(
-                        &c.loc,
-                        "film crop window is not supported: the whole film is rendered",
-                    );
-                }
+                crop = read_crop(c, width, height)?;
                 if let Some(f) = c.string("pixel_format")? {
                     if !matches!(f.to_ascii_lowercase().as_str(), "rgb" | "rgba") {
                         ctx.diag.warn(
@@ -595,10 +604,6 @@ fn read_film_and_sampler<'a>(
                 }
                 // Output encoding and options without effect on a linear RGB film.
                 for name in [
-                    "crop_offset_x",
-                    "crop_offset_y",
-                    "crop_width",
-                    "crop_height",
                     "pixel_format",
                     "component_format",
                     "file_format",
@@ -673,7 +678,74 @@ fn read_film_and_sampler<'a>(
             "sensor has no film; Mitsuba's default 768 x 576 is used",
         );
     }
-    Ok((width, height, spp))
+    Ok(match crop {
+        Some((w, h, window)) => FilmAndSampler {
+            width: w,
+            height: h,
+            spp,
+            crop: Some(window),
+        },
+        None => FilmAndSampler {
+            width,
+            height,
+            spp,
+            crop: None,
+        },
+    })
+}
+
+/// What a sensor's film and sampler say: the rendered size (a crop window's, if any), the
+/// samples per pixel and the crop window.
+struct FilmAndSampler {
+    width: u32,
+    height: u32,
+    spp: u32,
+    crop: Option<CropWindow>,
+}
+
+/// Mitsuba's crop window (`crop_offset_x/y`, `crop_width/height`; by default the whole
+/// film): its size and position, or `None` when it is the whole film.
+fn read_crop(
+    film: &Obj,
+    width: u32,
+    height: u32,
+) -> Result<Option<(u32, u32, CropWindow)>, SceneError> {
+    let get = |name: &str, default: u32| -> Result<u32, SceneError> {
+        match film.integer(name)? {
+            None => Ok(default),
+            Some(v) => u32::try_from(v)
+                .map_err(|_| syntax(film.loc_of(name), format!("film {name} must be >= 0"))),
+        }
+    };
+    let ox = get("crop_offset_x", 0)?;
+    let oy = get("crop_offset_y", 0)?;
+    let w = get("crop_width", width.saturating_sub(ox))?;
+    let h = get("crop_height", height.saturating_sub(oy))?;
+    if w == 0
+        || h == 0
+        || ox as u64 + w as u64 > width as u64
+        || oy as u64 + h as u64 > height as u64
+    {
+        return Err(syntax(
+            &film.loc,
+            format!(
+                "film crop window {w} x {h} at ({ox}, {oy}) is empty or leaves the {width} x {height} film"
+            ),
+        ));
+    }
+    if (ox, oy, w, h) == (0, 0, width, height) {
+        return Ok(None);
+    }
+    Ok(Some((
+        w,
+        h,
+        CropWindow {
+            film_width: width,
+            film_height: height,
+            offset_x: ox,
+            offset_y: oy,
+        },
+    )))
 }
 
 fn rfilter(ctx: &mut Ctx, f: &Obj) -> Result<(), SceneError> {
