@@ -81,6 +81,43 @@ def scene(integrator, body, sensor=PERSPECTIVE):
 """
 
 
+def write_serialized(path):
+    """A two-shape Mitsuba `.serialized` file (format 0x041C, version 4), written here so that
+    the reader is checked against Mitsuba's: shape 0 an octahedron with vertex normals, single
+    precision; shape 1 a slab (a flattened cube), double precision, no normals."""
+    import struct
+    import zlib
+
+    def shape(name, v, f, normals=None, double=False):
+        flags = (0x2000 if double else 0x1000) | (0x0001 if normals is not None else 0)
+        real = "<f8" if double else "<f4"
+        body = struct.pack("<I", flags) + name.encode() + b"\0"
+        body += struct.pack("<QQ", len(v), len(f))
+        body += np.asarray(v, real).tobytes()
+        if normals is not None:
+            body += np.asarray(normals, real).tobytes()
+        body += np.asarray(f, "<u4").tobytes()
+        return struct.pack("<HH", 0x041C, 4) + zlib.compress(body)
+
+    octa = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
+    octa_faces = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]
+    slab = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    # Outward-facing (counter-clockwise seen from outside) faces of the cube x, y, z in {-1, 1}.
+    slab_faces = [
+        [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],  # x = -1, x = +1
+        [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],  # y = -1, y = +1
+        [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],  # z = -1, z = +1
+    ]
+    data, offsets = b"", []
+    for blob in (shape("octahedron", octa, octa_faces, normals=octa), shape("slab", slab, slab_faces, double=True)):
+        offsets.append(len(data))
+        data += blob
+    data += b"".join(struct.pack("<Q", o) for o in offsets) + struct.pack("<I", len(offsets))
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(data)
+
+
 SCENES = {
     # The area light and diffuse surfaces every other test builds on.
     "area": scene("", CEILING + AREA_LIGHT),
@@ -199,6 +236,28 @@ SCENES = {
         </film>
     </sensor>""",
     ),
+    # Both shapes of a .serialized file (meshes/shapes.serialized, see write_serialized): an
+    # octahedron and a double-precision slab under it, both with face_normals: the renderer
+    # shades with the geometric normal, where Mitsuba would interpolate the octahedron's
+    # vertex normals and the slab's recomputed ones.
+    "serialized": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="serialized">
+        <string name="filename" value="meshes/shapes.serialized"/>
+        <boolean name="face_normals" value="true"/>
+        <transform name="to_world"><scale value="0.3"/><translate x="-0.4" y="0.5" z="0.1"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf>
+    </shape>
+    <shape type="serialized">
+        <string name="filename" value="meshes/shapes.serialized"/>
+        <integer name="shape_index" value="1"/>
+        <boolean name="face_normals" value="true"/>
+        <transform name="to_world"><scale x="0.4" y="0.1" z="0.4"/><translate x="-0.4" y="0.1" z="0.1"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.6, 0.2"/></bsdf>
+    </shape>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",
@@ -217,6 +276,8 @@ def render(xml, spp):
     wrapped = xml.replace('<integrator type="path">', '<integrator type="moment"><integrator type="path">', 1)
     wrapped = wrapped.replace("</integrator>", "</integrator></integrator>", 1)
     wrapped = re.sub(r'name="sample_count" value="\d+"', f'name="sample_count" value="{spp}"', wrapped)
+    # File names in the scenes are relative to their folder, as when Cohort loads them.
+    mi.Thread.thread().file_resolver().prepend(OUT)
     scene = mi.load_string(wrapped)
     img = np.array(mi.render(scene, seed=0), dtype=np.float64)
     # Channels: R, G, B, then the first and second moments of the wrapped integrator's
@@ -245,6 +306,7 @@ def main():
     a = ap.parse_args()
     names = a.names or list(SCENES)
     os.makedirs(OUT, exist_ok=True)
+    write_serialized(os.path.join(OUT, "meshes", "shapes.serialized"))
     for name in names:
         xml = SCENES[name]
         with open(os.path.join(OUT, f"{name}.xml"), "w") as f:

@@ -263,3 +263,8 @@ fn plastic_bsdf() {
 fn film_crop_window() {
     check("crop");
 }
+
+#[test]
+fn serialized_meshes() {
+    check("serialized");
+}

@@ -25,6 +25,7 @@ pub mod morton;
 pub mod obj;
 pub mod ply;
 pub mod scene;
+pub mod serialized;
 pub mod shapes;
 
 pub use builder::{Added, SceneBuilder, Shading};

@@ -625,11 +625,7 @@ fn unsupported_plugins_strict_and_lenient() {
             "bsdf 'roughdielectric'",
             "smooth dielectric",
         ),
-        (
-            r#"<shape type="serialized"><string name="filename" value="x.serialized"/></shape>"#,
-            "shape 'serialized'",
-            "skipped",
-        ),
+        (r#"<shape type="sdfgrid"/>"#, "shape 'sdfgrid'", "skipped"),
         (
             r#"<shape type="rectangle"><medium type="homogeneous" name="interior"/></shape>"#,
             "homogeneous",

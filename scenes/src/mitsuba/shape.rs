@@ -104,7 +104,7 @@ fn add_placed<'a>(
     let plugin = obj.plugin.as_str();
     if !matches!(
         plugin,
-        "obj" | "ply" | "rectangle" | "cube" | "sphere" | "disk" | "cylinder"
+        "obj" | "ply" | "serialized" | "rectangle" | "cube" | "sphere" | "disk" | "cylinder"
     ) {
         return ctx
             .diag
@@ -114,9 +114,16 @@ fn add_placed<'a>(
     let flip = obj.boolean("flip_normals")?.unwrap_or(false);
 
     let (mut mesh, shading, name) = match plugin {
-        "obj" | "ply" => {
+        "obj" | "ply" | "serialized" => {
             let face_normals = obj.boolean("face_normals")?.unwrap_or(false);
             let _ = obj.boolean("flip_tex_coords")?;
+            let shape_index = if plugin == "serialized" {
+                let i = obj.integer("shape_index")?.unwrap_or(0);
+                u32::try_from(i)
+                    .map_err(|_| syntax(obj.loc_of("shape_index"), "shape_index must be >= 0"))?
+            } else {
+                0
+            };
             let Some(filename) = obj.string("filename")? else {
                 return Err(syntax(
                     &obj.loc,
@@ -125,10 +132,10 @@ fn add_placed<'a>(
             };
             let outer = obj.loc_of("filename").clone();
             let path = find_mesh(ctx, &filename, &outer)?;
-            let mesh = if plugin == "obj" {
-                crate::obj::read_obj(&path)
-            } else {
-                crate::ply::read_ply(&path, &mut ctx.diag.warnings)
+            let mesh = match plugin {
+                "obj" => crate::obj::read_obj(&path),
+                "ply" => crate::ply::read_ply(&path, &mut ctx.diag.warnings),
+                _ => crate::serialized::read_serialized(&path, shape_index),
             }
             .map_err(|e| e.referenced_from(outer))?;
             let shading = if face_normals {
