@@ -10,7 +10,7 @@ cargo build --release -p cohort-render --example kernel_bench
 cargo build --release -p cohort-tests --example compile_times
 cp target/release/cohort target/release/examples/kernel_bench target/release/examples/compile_times bin-gpu/
 json=$(cargo test --release --no-run -p cohort-tests -p cohort-render -p cohort-runtime --message-format=json 2>/dev/null)
-for t in difftest random_kernels traversal render nee compiler_bugs conformance_numeric; do
+for t in difftest random_kernels traversal render nee compiler_bugs conformance_numeric memory mitsuba_reference; do
   exe=$(echo "$json" | grep -o "\"executable\":\"[^\"]*/$t-[^\"]*\"" | tail -1 | cut -d'"' -f4)
   cp "$exe" "bin-gpu/$t"
 done

@@ -16,6 +16,12 @@ for t in difftest random_kernels conformance_numeric traversal render nee runtim
   filter=""; [ "$t" = render ] && filter="backends_agree white_furnace"; [ "$t" = nee ] && filter="white_furnace environment"
   echo "== $t"; (cd tests && ../$B/$t --test-threads 1 $filter 2>&1 | grep -E "^test |panicked|differ|test result" | tail -12)
 done
+# Renderers in flat memory, and Mitsuba's render test at its budget (the scenes and
+# references travel with the repository; the binary finds them through CARGO_MANIFEST_DIR).
+for t in memory mitsuba_reference; do
+  [ -x "$B/$t" ] || continue
+  echo "== $t"; (cd render && CARGO_MANIFEST_DIR=$PWD ../$B/$t --test-threads 1 --nocapture 2>&1 | grep -E "resident|pixel channels pass \(|panicked|test result")
+done
 } 2>&1 | tee "$OUT/tests.log"
 echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tail -3
 for be in vulkan wgpu; do

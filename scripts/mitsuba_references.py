@@ -237,25 +237,42 @@ SCENES = {
     </sensor>""",
     ),
     # Both shapes of a .serialized file (meshes/shapes.serialized, see write_serialized): an
-    # octahedron and a double-precision slab under it, both with face_normals: the renderer
-    # shades with the geometric normal, where Mitsuba would interpolate the octahedron's
-    # vertex normals and the slab's recomputed ones.
+    # octahedron shaded with its vertex normals and a double-precision slab under it, shaded
+    # with the normals Mitsuba recomputes for a mesh without any.
     "serialized": scene(
         "",
         CEILING
         + AREA_LIGHT
         + """<shape type="serialized">
         <string name="filename" value="meshes/shapes.serialized"/>
-        <boolean name="face_normals" value="true"/>
         <transform name="to_world"><scale value="0.3"/><translate x="-0.4" y="0.5" z="0.1"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf>
     </shape>
     <shape type="serialized">
         <string name="filename" value="meshes/shapes.serialized"/>
         <integer name="shape_index" value="1"/>
-        <boolean name="face_normals" value="true"/>
         <transform name="to_world"><scale x="0.4" y="0.1" z="0.4"/><translate x="-0.4" y="0.1" z="0.1"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.6, 0.2"/></bsdf>
+    </shape>""",
+    ),
+    # Mitsuba's analytic sphere, cylinder and disk, which the renderer tessellates and shades
+    # with interpolated normals.
+    "analytic_shapes": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.45, 0.35, 0.2"/><float name="radius" value="0.3"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.8"/></bsdf>
+    </shape>
+    <shape type="cylinder">
+        <point name="p0" value="0.5, 0.0, 0.45"/><point name="p1" value="0.5, 0.6, 0.45"/>
+        <float name="radius" value="0.15"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf>
+    </shape>
+    <shape type="disk">
+        <transform name="to_world"><scale value="0.15"/><rotate x="1" angle="-90"/><translate x="0.5" y="0.6" z="0.45"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf>
     </shape>""",
     ),
     # No ceiling: sunlight falls into the box from above.

@@ -109,6 +109,30 @@ pub fn init_paths(
     accum[g] = Vec4::ZERO;
 }
 
+/// The shading normal at hit `h` (barycentric weights of v1 and v2 in `h.y`, `h.z`) of
+/// triangle `original`: its vertex normals interpolated where the scene has them (a
+/// degenerate interpolation falls back to the geometric normal `ng`), else `ng`.
+#[kernel_fn]
+pub fn shading_normal(
+    f: &Frame,
+    shading_normals: &[Vec4],
+    original: u32,
+    h: Vec4,
+    ng: Vec3,
+) -> Vec3 {
+    let mut n = ng;
+    if f.shading_normals != 0 {
+        let k = original as usize * 3;
+        let s = shading_normals[k].truncate() * (1.0 - h.y - h.z)
+            + shading_normals[k + 1].truncate() * h.y
+            + shading_normals[k + 2].truncate() * h.z;
+        if s.dot(s) > 1.0e-30 {
+            n = s.normalize();
+        }
+    }
+    n
+}
+
 /// Offset along the normal that keeps a new ray off the surface it leaves, scaled with
 /// the hit point's magnitude.
 #[kernel_fn]
@@ -128,6 +152,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     idrays: &[u32],
     hits: &[Vec4],
     tris: &[Triangle],
+    shading_normals: &[Vec4],
     materials: &[Material],
     lights: &[LightEntry],
     delta_lights: &[DeltaLight],
@@ -247,9 +272,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 } else {
                     -d
                 };
-                let front = ng.dot(d) < 0.0;
+                // Shading happens in the frame of the interpolated vertex normal, as in
+                // Mitsuba (sidedness included); new rays leave along the geometric normal.
+                let ns = shading_normal(f, shading_normals, t.original, h, ng);
+                let front = ns.dot(d) < 0.0;
                 let two_sided = m.flags & TWO_SIDED != 0;
-                let n = if front { ng } else { -ng };
+                let n = if front { ns } else { -ns };
+                // The geometric normal on the side the shading normal faces.
+                let ng_n = if ng.dot(n) >= 0.0 { ng } else { -ng };
                 let p = ray_o[r].truncate() + d * h.x;
                 let pass_through = hidden && m.flags & EMITTER != 0;
                 if m.flags & EMITTER != 0 && (front || two_sided) && !hidden {
@@ -281,7 +311,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             ul = shared_light.x;
                             up = cell_point(shared_light.y.to_bits(), f.light_cells, up);
                         }
-                        let o = offset_origin(p, n);
+                        let o = offset_origin(p, ng_n);
                         let mut wi = Vec3::ZERO;
                         let mut le = Vec3::ZERO;
                         let mut light_pdf = 0.0f32;
@@ -371,14 +401,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 if pass_through {
                     // The camera ray goes on behind the hidden emitter, still a camera ray.
                     new_d = d;
-                    new_o = offset_origin(p, -n);
                     alive = true;
                     next_bounce = bounce;
                 } else if diffuse {
                     let s = S::sample(n, u, shared_patch, f.patches_n);
                     new_d = s.truncate();
                     thr = thr * m.color * s.w;
-                    new_o = offset_origin(p, n);
                     alive = true;
                     // MIS weights use the cosine density whatever strategy S drew the
                     // direction: every strategy covers the whole hemisphere (over the
@@ -406,12 +434,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
                         env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
                     }
-                    new_o = offset_origin(p, n);
                     alive = true;
                 } else if m.kind == CONDUCTOR {
                     new_d = d - n * (2.0 * d.dot(n));
                     thr = thr * m.color;
-                    new_o = offset_origin(p, n);
                     alive = true;
                 } else if glossy {
                     let fr = crate::sampling::frame(n);
@@ -427,7 +453,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if wi.z > 0.0 {
                         new_d = fr * wi;
                         thr = thr * m.color * smith_g1(wi.z, m.param);
-                        new_o = offset_origin(p, n);
                         alive = true;
                         bsdf_pdf = ggx_eval(wo, wi, m.param).y;
                         env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
@@ -440,18 +465,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if uniform(key, 4) < fr {
                         new_d = d + n * (2.0 * cos_i);
                         thr = thr * m.color;
-                        new_o = offset_origin(p, n);
                     } else {
                         let inv = 1.0 / eta;
                         let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
                         new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
                         thr = thr * m.transmittance;
-                        new_o = offset_origin(p, -n);
                     }
                     alive = true;
                 }
                 // Anything else absorbs: a black or back-facing one-sided surface (diffuse,
                 // plastic), whose BSDF is zero there, as in Mitsuba. The path ends here.
+                // A continuing ray starts off the surface on the side it leaves towards
+                // (with shading normals that can differ from the side `n` faces).
+                if alive {
+                    let side = if ng.dot(new_d) >= 0.0 { ng } else { -ng };
+                    new_o = offset_origin(p, side);
+                }
                 if alive && !pass_through && f.max_depth != 0 && bounce + 1 >= f.max_depth {
                     alive = false;
                 }

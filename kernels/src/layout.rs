@@ -134,7 +134,9 @@ pub struct Frame {
     /// `cam_origin` (spanned by `cam_right`, `cam_up`) and meet at `focus_distance`.
     pub lens_radius: f32,
     pub focus_distance: f32,
-    pub pad4: u32,
+    /// 1: triangles carry per-vertex shading normals (`extend`'s `shading_normals`), which
+    /// Mitsuba interpolates for shading; 0: every triangle shades with its face normal.
+    pub shading_normals: u32,
     pub pad5: u32,
 }
 

@@ -10,6 +10,11 @@ pub struct GpuScene {
     pub nodes: GpuBuffer<BvhNode>,
     pub triangles: GpuBuffer<Triangle>,
     pub materials: GpuBuffer<Material>,
+    /// Per-vertex shading normals, 3 per triangle in the scene's order (`Triangle::original`),
+    /// or one zero element when every triangle shades with its face normal.
+    pub shading_normals: GpuBuffer<glam::Vec4>,
+    /// Whether `shading_normals` holds the scene's normals.
+    pub has_shading_normals: bool,
     pub triangle_count: usize,
     /// Next-event estimation's alias table over the emitter triangles (`crate::lights`).
     pub lights: GpuBuffer<LightEntry>,
@@ -64,10 +69,19 @@ impl GpuScene {
         let lights = crate::lights::build(scene, &mut tris);
         let mats = scene.gpu_materials();
         let mats: &[Material] = cast(&mats);
+        let normals: Vec<glam::Vec4> = scene
+            .triangles
+            .normals
+            .iter()
+            .flatten()
+            .map(|n| n.extend(0.0))
+            .collect();
         Ok(GpuScene {
             nodes: upload(device, nodes)?,
             triangles: upload(device, &tris)?,
             materials: upload(device, mats)?,
+            has_shading_normals: !normals.is_empty(),
+            shading_normals: upload(device, &normals)?,
             triangle_count: tris.len(),
             lights: upload(device, &lights.entries)?,
             delta_lights: upload(device, &lights.delta)?,

@@ -42,8 +42,14 @@ const SIGNIFICANCE: f64 = 0.01;
 /// Share of pixel channels that must pass.
 const PASS_SHARE: f64 = 0.9975;
 
+/// The scenes and references: under the package, found through `CARGO_MANIFEST_DIR` at run
+/// time (cargo sets it; set it to run a copied test binary elsewhere, as
+/// `scripts/gpu-run.sh` does), else where the package was built.
 fn scene_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/mitsuba")
+    std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+        .join("tests/scenes/mitsuba")
 }
 
 /// Linear sRGB to CIE XYZ, the matrix the reference script uses.
@@ -267,4 +273,9 @@ fn film_crop_window() {
 #[test]
 fn serialized_meshes() {
     check("serialized");
+}
+
+#[test]
+fn analytic_shapes_tessellated_and_smooth() {
+    check("analytic_shapes");
 }

@@ -17,8 +17,10 @@ use crate::material::Material;
 /// save memory only on meshes we never render large enough for it to matter.
 ///
 /// The geometric (face) normal is always `normalize(cross(v1 - v0, v2 - v0))` (Mitsuba's rule, after
-/// `to_world`): it decides one-sidedness (diffuse/conductor back faces are black, area lights emit
-/// only on its side) and inside/outside for dielectrics. Counter-clockwise winding is the front.
+/// `to_world`); counter-clockwise winding is the front. Where the triangles carry shading normals,
+/// the renderer shades in the frame of the interpolated one, as Mitsuba does: it decides
+/// one-sidedness (diffuse/conductor back faces are black, area lights emit only on its side) and
+/// inside/outside for dielectrics; new rays leave along the geometric normal.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Triangles {
     /// 3 per triangle.
