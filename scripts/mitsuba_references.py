@@ -60,22 +60,32 @@ AREA_LIGHT = """
 """
 
 
-PERSPECTIVE = """<sensor type="perspective">
-        <float name="fov" value="45"/>
-        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
+LOOK_AT_BOX = '<transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>'
+SQUARE_FILM = f'<integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>'
+
+
+def sensor(plugin, params, film=SQUARE_FILM):
+    """A `plugin` sensor with `params` (lines, to_world included), 64 independent samples per
+    pixel and a box-filtered hdrfilm sized by the `film` lines."""
+    params = "\n        ".join(params)
+    film = "\n            ".join([film] if isinstance(film, str) else film)
+    return f"""<sensor type="{plugin}">
+        {params}
         <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
         <film type="hdrfilm">
-            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+            {film}
             <rfilter type="box"/>
         </film>
     </sensor>"""
 
 
-def scene(integrator, body, sensor=PERSPECTIVE):
-    sensor = sensor.replace("{SIZE}", str(SIZE))
+PERSPECTIVE = sensor("perspective", ['<float name="fov" value="45"/>', LOOK_AT_BOX])
+
+
+def scene(integrator, body, camera=PERSPECTIVE):
     return f"""<scene version="3.0.0">
     <integrator type="path">{integrator}</integrator>
-    {sensor}
+    {camera}
 {BOX}{body}
 </scene>
 """
@@ -174,31 +184,27 @@ SCENES = {
         CEILING
         + AREA_LIGHT
         + '<emitter type="constant"><rgb name="radiance" value="0.2, 0.25, 0.3"/></emitter>',
-        sensor="""<sensor type="orthographic">
-        <transform name="to_world"><scale x="1.25" y="1.25"/><lookat origin="0.3, 1.6, 3.4" target="0, 0.9, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
-        <film type="hdrfilm">
-            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
-            <rfilter type="box"/>
-        </film>
-    </sensor>""",
+        camera=sensor(
+            "orthographic",
+            [
+                '<transform name="to_world"><scale x="1.25" y="1.25"/><lookat origin="0.3, 1.6, 3.4" target="0, 0.9, 0" up="0, 1, 0"/></transform>'
+            ],
+        ),
     ),
     # A thin lens focused on the white cube, with an aperture wide enough to blur the
     # back wall and the light.
     "thinlens": scene(
         "",
         CEILING + AREA_LIGHT,
-        sensor="""<sensor type="thinlens">
-        <float name="fov" value="45"/>
-        <float name="aperture_radius" value="0.12"/>
-        <float name="focus_distance" value="3.7"/>
-        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
-        <film type="hdrfilm">
-            <integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
-            <rfilter type="box"/>
-        </film>
-    </sensor>""",
+        camera=sensor(
+            "thinlens",
+            [
+                '<float name="fov" value="45"/>',
+                '<float name="aperture_radius" value="0.12"/>',
+                '<float name="focus_distance" value="3.7"/>',
+                LOOK_AT_BOX,
+            ],
+        ),
     ),
     # Plastic: a cube with Mitsuba's defaults but its colour, and a nonlinear slab of
     # another index on the floor, lit by the area light and a sky.
@@ -224,17 +230,15 @@ SCENES = {
     "crop": scene(
         "",
         CEILING + AREA_LIGHT,
-        sensor="""<sensor type="perspective">
-        <float name="fov" value="50"/>
-        <transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
-        <film type="hdrfilm">
-            <integer name="width" value="64"/><integer name="height" value="48"/>
-            <integer name="crop_offset_x" value="22"/><integer name="crop_offset_y" value="4"/>
-            <integer name="crop_width" value="32"/><integer name="crop_height" value="32"/>
-            <rfilter type="box"/>
-        </film>
-    </sensor>""",
+        camera=sensor(
+            "perspective",
+            ['<float name="fov" value="50"/>', LOOK_AT_BOX],
+            film=[
+                '<integer name="width" value="64"/><integer name="height" value="48"/>',
+                '<integer name="crop_offset_x" value="22"/><integer name="crop_offset_y" value="4"/>',
+                '<integer name="crop_width" value="32"/><integer name="crop_height" value="32"/>',
+            ],
+        ),
     ),
     # Both shapes of a .serialized file (meshes/shapes.serialized, see write_serialized): an
     # octahedron shaded with its vertex normals and a double-precision slab under it, shaded

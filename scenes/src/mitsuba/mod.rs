@@ -352,74 +352,21 @@ fn fov_from_focal_length(mm: f64) -> f32 {
 }
 
 fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), SceneError> {
-    match obj.plugin.as_str() {
-        "perspective" => {}
-        "orthographic" => {
-            let camera = read_orthographic(ctx, obj)?;
-            obj.ignore("shutter_open");
-            obj.ignore("shutter_close");
-            obj.ignore("srf");
-            let FilmAndSampler {
-                width,
-                height,
-                spp,
-                crop,
-            } = read_film_and_sampler(ctx, obj, false)?;
-            obj.finish(&mut ctx.diag)?;
-            return Ok((
-                Camera {
-                    width,
-                    height,
-                    crop,
-                    ..camera
-                },
-                spp,
-            ));
-        }
-        "thinlens" => {
+    let camera = match obj.plugin.as_str() {
+        "perspective" => {
             let camera = read_perspective(ctx, obj)?;
-            let Some(aperture_radius) = obj.float("aperture_radius")? else {
-                return Err(syntax(
-                    &obj.loc,
-                    "sensor 'thinlens' needs an 'aperture_radius' (as in Mitsuba)",
-                ));
-            };
-            // Mitsuba focuses at the far clip plane unless told otherwise.
-            let focus_distance = obj.float("focus_distance")?.unwrap_or(camera.far_clip);
-            if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
-                return Err(syntax(
-                    obj.loc_of("aperture_radius"),
-                    "aperture_radius must be finite and >= 0",
-                ));
+            for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+                if obj.float(name)?.is_some_and(|v| v != 0.0) {
+                    ctx.diag.warn(
+                        obj.loc_of(name),
+                        format!("{name} is not supported: the principal point stays centred"),
+                    );
+                }
             }
-            if !(focus_distance > 0.0 && focus_distance.is_finite()) {
-                return Err(syntax(
-                    obj.loc_of("focus_distance"),
-                    "focus_distance must be finite and positive",
-                ));
-            }
-            obj.ignore("shutter_open");
-            obj.ignore("shutter_close");
-            obj.ignore("srf");
-            let FilmAndSampler {
-                width,
-                height,
-                spp,
-                crop,
-            } = read_film_and_sampler(ctx, obj, false)?;
-            obj.finish(&mut ctx.diag)?;
-            return Ok((
-                Camera {
-                    width,
-                    height,
-                    crop,
-                    aperture_radius,
-                    focus_distance,
-                    ..camera
-                },
-                spp,
-            ));
+            camera
         }
+        "orthographic" => read_orthographic(ctx, obj)?,
+        "thinlens" => read_thinlens(ctx, obj)?,
         other => {
             ctx.diag.unsupported(
                 &obj.loc,
@@ -428,47 +375,46 @@ fn parse_sensor<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Camera, u32), Sc
             )?;
             // Read what a perspective camera would; the rest is the unsupported plugin's.
             let camera = read_perspective(ctx, obj)?;
-            let film = read_film_and_sampler(ctx, obj, true)?;
-            return Ok((
-                Camera {
-                    width: film.width,
-                    height: film.height,
-                    crop: film.crop,
-                    ..camera
-                },
-                film.spp,
-            ));
+            return Ok(read_film_and_sampler(ctx, obj, true)?.fit(camera));
         }
-    }
-    let camera = read_perspective(ctx, obj)?;
-    for name in ["principal_point_offset_x", "principal_point_offset_y"] {
-        if obj.float(name)?.is_some_and(|v| v != 0.0) {
-            ctx.diag.warn(
-                obj.loc_of(name),
-                format!("{name} is not supported: the principal point stays centred"),
-            );
-        }
-    }
+    };
     // No motion blur in a static scene; a spectral response has no effect on an RGB film.
     obj.ignore("shutter_open");
     obj.ignore("shutter_close");
     obj.ignore("srf");
-    let FilmAndSampler {
-        width,
-        height,
-        spp,
-        crop,
-    } = read_film_and_sampler(ctx, obj, false)?;
+    let film = read_film_and_sampler(ctx, obj, false)?;
     obj.finish(&mut ctx.diag)?;
-    Ok((
-        Camera {
-            width,
-            height,
-            crop,
-            ..camera
-        },
-        spp,
-    ))
+    Ok(film.fit(camera))
+}
+
+/// Mitsuba `thinlens`: a perspective camera with `aperture_radius` (required) and
+/// `focus_distance` (default: the far clip plane, as in Mitsuba).
+fn read_thinlens(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
+    let camera = read_perspective(ctx, obj)?;
+    let Some(aperture_radius) = obj.float("aperture_radius")? else {
+        return Err(syntax(
+            &obj.loc,
+            "sensor 'thinlens' needs an 'aperture_radius' (as in Mitsuba)",
+        ));
+    };
+    let focus_distance = obj.float("focus_distance")?.unwrap_or(camera.far_clip);
+    if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+        return Err(syntax(
+            obj.loc_of("aperture_radius"),
+            "aperture_radius must be finite and >= 0",
+        ));
+    }
+    if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+        return Err(syntax(
+            obj.loc_of("focus_distance"),
+            "focus_distance must be finite and positive",
+        ));
+    }
+    Ok(Camera {
+        aperture_radius,
+        focus_distance,
+        ..camera
+    })
 }
 
 fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
@@ -701,6 +647,19 @@ struct FilmAndSampler {
     height: u32,
     spp: u32,
     crop: Option<CropWindow>,
+}
+
+impl FilmAndSampler {
+    /// `camera` rendering this film, and the samples per pixel.
+    fn fit(self, camera: Camera) -> (Camera, u32) {
+        let camera = Camera {
+            width: self.width,
+            height: self.height,
+            crop: self.crop,
+            ..camera
+        };
+        (camera, self.spp)
+    }
 }
 
 /// Mitsuba's crop window (`crop_offset_x/y`, `crop_width/height`; by default the whole
