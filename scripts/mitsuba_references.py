@@ -64,17 +64,23 @@ LOOK_AT_BOX = '<transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 
 SQUARE_FILM = f'<integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>'
 
 
-def sensor(plugin, params, film=SQUARE_FILM):
+BOX_FILTER = '<rfilter type="box"/>'
+
+
+def sensor(plugin, params, film=SQUARE_FILM, rfilter=BOX_FILTER):
     """A `plugin` sensor with `params` (lines, to_world included), 64 independent samples per
-    pixel and a box-filtered hdrfilm sized by the `film` lines."""
+    pixel and an hdrfilm sized by the `film` lines, filtered by `rfilter` (None: no rfilter
+    element, Mitsuba's default gaussian)."""
     params = "\n        ".join(params)
-    film = "\n            ".join([film] if isinstance(film, str) else film)
+    film = [film] if isinstance(film, str) else list(film)
+    if rfilter is not None:
+        film.append(rfilter)
+    film = "\n            ".join(film)
     return f"""<sensor type="{plugin}">
         {params}
         <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
         <film type="hdrfilm">
             {film}
-            <rfilter type="box"/>
         </film>
     </sensor>"""
 
@@ -277,6 +283,59 @@ SCENES = {
     <shape type="disk">
         <transform name="to_world"><scale value="0.15"/><rotate x="1" angle="-90"/><translate x="0.5" y="0.6" z="0.45"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf>
+    </shape>""",
+    ),
+    # Reconstruction filters: Mitsuba's default (a film without rfilter: gaussian, stddev 0.5)
+    # and a wide tent sampled beyond the film's edges. (Filters with negative lobes cannot be
+    # judged this way: where the splatting weights change sign, what the `moment` integrator
+    # records is no variance; kernels/tests/film_filter.rs checks them exactly.)
+    "filter_gaussian": scene(
+        "",
+        CEILING + AREA_LIGHT,
+        camera=sensor("perspective", ['<float name="fov" value="45"/>', LOOK_AT_BOX], rfilter=None),
+    ),
+    "filter_tent_border": scene(
+        "",
+        CEILING + AREA_LIGHT,
+        camera=sensor(
+            "perspective",
+            ['<float name="fov" value="45"/>', LOOK_AT_BOX],
+            film=[SQUARE_FILM, '<boolean name="sample_border" value="true"/>'],
+            rfilter='<rfilter type="tent"><float name="radius" value="1.25"/></rfilter>',
+        ),
+    ),
+    # Conductors: a gold sphere by `material` name, and the cube given eta and k directly.
+    "conductor": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="conductor"><string name="material" value="Au"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.2"/><rotate y="1" angle="-30"/><translate x="0.45" y="0.8" z="-0.5"/></transform>
+        <bsdf type="conductor">
+            <rgb name="eta" value="0.2, 0.9, 1.2"/><rgb name="k" value="3.0, 2.5, 2.0"/>
+            <rgb name="specular_reflectance" value="0.9, 0.9, 0.8"/>
+        </bsdf>
+    </shape>""",
+    ),
+    # Rough conductors: Mitsuba's default Beckmann distribution (copper), and GGX.
+    "roughconductor": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="roughconductor"><string name="material" value="Cu"/><float name="alpha" value="0.2"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.5, 0.95, -0.4"/><float name="radius" value="0.3"/>
+        <bsdf type="roughconductor">
+            <string name="distribution" value="ggx"/><float name="alpha" value="0.35"/>
+            <string name="material" value="Al"/>
+        </bsdf>
     </shape>""",
     ),
     # No ceiling: sunlight falls into the box from above.

@@ -16,20 +16,109 @@ use crate::light::{
 use crate::path_end::PathEnd;
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{
-    cell_point, fresnel_dielectric, ggx_eval, ggx_vndf, plastic_base, plastic_specular_probability,
-    smith_g1, DiffuseSampler,
+    cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
+    plastic_base, plastic_specular_probability, DiffuseSampler,
 };
 use cohort::prelude::*;
 
-/// A random point of `pixel` on the film, as the offset `(2 sx - 1) right + (1 - 2 sy) up`
-/// from the image centre (`sx`, `sy` in [0, 1], y down).
+/// Bins of the reconstruction filter's table across `[-radius, radius]`
+/// (`cohort_scenes::film_filter::FILTER_BINS`): two cumulative tables of `FILTER_BINS + 1`
+/// values each, of `|f|` and of `f`.
+pub const FILTER_BINS: u32 = 62;
+
+/// The cumulative integral of the filter table starting at `base` (its `|f|` half at 0, its
+/// signed half at `FILTER_BINS + 1`) at offset `t` from a pixel's centre, `t` clamped to the
+/// filter's radius `radius`.
 #[kernel_fn]
-pub fn film_offset(f: &Frame, pixel: u32, key: u32) -> Vec3 {
-    let px = (pixel % f.width) as f32 + uniform(key, 0);
-    let py = (pixel / f.width) as f32 + uniform(key, 1);
+pub fn filter_cdf(table: &[f32], base: u32, radius: f32, t: f32) -> f32 {
+    let x = ((t + radius) * (FILTER_BINS as f32 * 0.5) / radius).clamp(0.0, FILTER_BINS as f32);
+    let k = (x as u32).min(FILTER_BINS - 1);
+    let c0 = table[(base + k) as usize];
+    let c1 = table[(base + k + 1) as usize];
+    c0 + (x - k as f32) * (c1 - c0)
+}
+
+/// An offset along one axis from a pixel's centre, drawn with density proportional to the
+/// filter's `|f|` restricted to `[lo, hi]` (the sampled film area), and its weight: the sign
+/// of `f` there times `integral |f| / integral f` over `[lo, hi]`, which is 1 for a filter
+/// without negative lobes. The mean of weighted radiance at such offsets is Mitsuba's
+/// filtered pixel (`cohort_scenes::film_filter`). Returns (offset, weight).
+#[kernel_fn]
+pub fn filter_offset(table: &[f32], radius: f32, lo: f32, hi: f32, u: f32) -> Vec2 {
+    let a = filter_cdf(table, 0, radius, lo);
+    let b = filter_cdf(table, 0, radius, hi);
+    let target = a + u * (b - a);
+    // The last bin edge at or below `target` (binary search over the edges).
+    let mut k0 = 0u32;
+    let mut k1 = FILTER_BINS;
+    while k1 - k0 > 1 {
+        let mid = (k0 + k1) / 2;
+        if table[mid as usize] <= target {
+            k0 = mid;
+        } else {
+            k1 = mid;
+        }
+    }
+    let c0 = table[k0 as usize];
+    let c1 = table[(k0 + 1) as usize];
+    let mut frac = 0.5f32;
+    if c1 > c0 {
+        frac = ((target - c0) / (c1 - c0)).clamp(0.0, 1.0);
+    }
+    let h = 2.0 * radius / FILTER_BINS as f32;
+    let t = (-radius + (k0 as f32 + frac) * h).max(lo).min(hi);
+    let signed = FILTER_BINS + 1;
+    let sa = filter_cdf(table, signed, radius, lo);
+    let sb = filter_cdf(table, signed, radius, hi);
+    let mut w = 1.0f32;
+    if sb - sa != b - a {
+        w = (b - a) / (sb - sa);
+        if table[(signed + k0 + 1) as usize] < table[(signed + k0) as usize] {
+            w = -w;
+        }
+    }
+    Vec2::new(t, w)
+}
+
+/// A random point for `pixel` on the film, as the offset `(2 sx - 1) right + (1 - 2 sy) up`
+/// from the image centre (`sx`, `sy` in [0, 1], y down) in xyz, and its weight in w. With the
+/// box filter (`filter_radius` 0) the point is uniform in the pixel and the weight 1; with
+/// another reconstruction filter it is drawn from the filter around the pixel's centre over
+/// the sampled film area (`filter_offset`).
+#[kernel_fn]
+pub fn film_sample(f: &Frame, film_filter: &[f32], pixel: u32, key: u32) -> Vec4 {
+    let ix = (pixel % f.width) as f32;
+    let iy = (pixel / f.width) as f32;
+    let mut px = ix + uniform(key, 0);
+    let mut py = iy + uniform(key, 1);
+    let mut w = 1.0f32;
+    if f.filter_radius > 0.0 {
+        let r = f.filter_radius;
+        let border = f.filter_border as f32;
+        let cx = ix + 0.5;
+        let cy = iy + 0.5;
+        let ox = filter_offset(
+            film_filter,
+            r,
+            (-border - cx).max(-r),
+            (f.width as f32 + border - cx).min(r),
+            uniform(key, 0),
+        );
+        let oy = filter_offset(
+            film_filter,
+            r,
+            (-border - cy).max(-r),
+            (f.height as f32 + border - cy).min(r),
+            uniform(key, 1),
+        );
+        px = cx + ox.x;
+        py = cy + oy.x;
+        w = ox.y * oy.y;
+    }
     let sx = px / f.width as f32;
     let sy = py / f.height as f32;
-    f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy)
+    let o = f.cam_right * (2.0 * sx - 1.0) + f.cam_up * (1.0 - 2.0 * sy);
+    o.extend(w)
 }
 
 /// A uniform point of a thin lens, as an offset from `cam_origin` (zero for a pinhole):
@@ -46,7 +135,7 @@ pub fn lens_offset(f: &Frame, key: u32) -> Vec3 {
     offset
 }
 
-/// Direction of the camera ray through film offset `film` (`film_offset`) and lens offset
+/// Direction of the camera ray through film offset `film` (`film_sample`) and lens offset
 /// `lens` (`lens_offset`): along the view axis (orthographic), through the film (pinhole),
 /// or from the lens point to where the film ray meets the plane of focus (thin lens), as
 /// `cohort_scenes::Camera::ray_through_lens`.
@@ -72,15 +161,20 @@ pub fn camera_origin(f: &Frame, film: Vec3, lens: Vec3) -> Vec3 {
     o
 }
 
-/// Path throughput of a fresh camera ray; w is the BSDF-sampling density of the ray's
-/// direction for MIS, 0: a camera ray reaching a light counts in full.
-pub const CAMERA_BETA: Vec4 = Vec4::new(1.0, 1.0, 1.0, 0.0);
+/// Path throughput of a fresh camera ray of film weight `weight` (`film_sample`); w is the
+/// BSDF-sampling density of the ray's direction for MIS, 0: a camera ray reaching a light
+/// counts in full.
+#[kernel_fn]
+pub fn camera_beta(weight: f32) -> Vec4 {
+    Vec4::new(weight, weight, weight, 0.0)
+}
 
 /// Starts every slot: first camera ray, empty estimate, identity order.
 #[kernel(workgroup = 64)]
 pub fn init_paths(
     #[builtin(global_index)] gi: u32,
     f: &Frame,
+    film_filter: &[f32],
     slot_pixel: &[u32],
     idrays: &mut [u32],
     state: &mut [UVec4],
@@ -96,7 +190,8 @@ pub fn init_paths(
     }
     let pixel = slot_pixel[g];
     let key = stream(f.seed, pixel, f.first_path, 0);
-    let film = film_offset(f, pixel, key);
+    let fs = film_sample(f, film_filter, pixel, key);
+    let film = fs.truncate();
     let lens = lens_offset(f, key);
     let o = camera_origin(f, film, lens);
     let d = camera_dir(f, film, lens);
@@ -104,7 +199,7 @@ pub fn init_paths(
     state[g] = UVec4::new(pixel, f.first_path, 0, 0);
     ray_o[g] = Vec4::new(o.x, o.y, o.z, 0.0);
     ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
-    beta[g] = CAMERA_BETA;
+    beta[g] = camera_beta(fs.w);
     radiance[g] = Vec4::ZERO;
     accum[g] = Vec4::ZERO;
 }
@@ -153,6 +248,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     hits: &[Vec4],
     tris: &[Triangle],
     shading_normals: &[Vec4],
+    film_filter: &[f32],
     materials: &[Material],
     lights: &[LightEntry],
     delta_lights: &[DeltaLight],
@@ -294,7 +390,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
                 let diffuse =
                     m.kind == DIFFUSE && (front || two_sided) && m.color.max_element() > 0.0;
-                let glossy = m.kind == ROUGH_CONDUCTOR;
+                // Conductors are one-sided, as in Mitsuba: the back absorbs.
+                let glossy = m.kind == ROUGH_CONDUCTOR && (front || two_sided);
                 let plastic = m.kind == PLASTIC && (front || two_sided);
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
@@ -383,8 +480,15 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 pdf_b = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
                             } else {
                                 let fr = crate::sampling::frame(n);
-                                let e = ggx_eval(fr.transpose() * -d, fr.transpose() * wi, m.param);
-                                fc = m.color * e.x;
+                                let e = microfacet_eval(
+                                    fr.transpose() * -d,
+                                    fr.transpose() * wi,
+                                    m.param,
+                                    m.flags & BECKMANN != 0,
+                                );
+                                fc = m.color
+                                    * fresnel_conductor(e.z, m.transmittance, m.conductor_k)
+                                    * e.x;
                                 pdf_b = e.y;
                             }
                             let weight = if delta_select > 0.0 {
@@ -435,9 +539,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
                     }
                     alive = true;
-                } else if m.kind == CONDUCTOR {
-                    new_d = d - n * (2.0 * d.dot(n));
-                    thr = thr * m.color;
+                } else if m.kind == CONDUCTOR && (front || two_sided) {
+                    let cos_i = -d.dot(n);
+                    new_d = d + n * (2.0 * cos_i);
+                    thr = thr * m.color * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
                     alive = true;
                 } else if glossy {
                     let fr = crate::sampling::frame(n);
@@ -448,13 +553,16 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if f.coherent_glossy != 0 {
                         ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
                     }
-                    let mn = ggx_vndf(wo, m.param, ug);
+                    let beckmann = m.flags & BECKMANN != 0;
+                    let mn = microfacet_sample(wo, m.param, beckmann, ug);
                     let wi = mn * (2.0 * wo.dot(mn)) - wo;
-                    if wi.z > 0.0 {
+                    let e = microfacet_eval(wo, wi, m.param, beckmann);
+                    if wi.z > 0.0 && e.y > 0.0 {
                         new_d = fr * wi;
-                        thr = thr * m.color * smith_g1(wi.z, m.param);
+                        let fresnel = fresnel_conductor(e.z, m.transmittance, m.conductor_k);
+                        thr = thr * m.color * fresnel * (e.x / e.y);
                         alive = true;
-                        bsdf_pdf = ggx_eval(wo, wi, m.param).y;
+                        bsdf_pdf = e.y;
                         env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
                     }
                 } else if m.kind == DIELECTRIC {
@@ -493,7 +601,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // paths trapped by total internal reflection end.
                     let mut q = f.rr_continue;
                     if f.roulette_throughput != 0 {
-                        q = thr.max_element().min(0.95);
+                        // |throughput|: a reconstruction filter's negative lobes make
+                        // it negative (`film_sample`).
+                        q = thr.abs().max_element().min(0.95);
                     }
                     if rr_u < q {
                         thr = thr / q;
@@ -542,12 +652,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 wg_done[1].fetch_add(1, Ordering::Relaxed);
             }
             let key = stream(f.seed, pixel, next, 0);
-            let film = film_offset(f, pixel, key);
+            let fs = film_sample(f, film_filter, pixel, key);
+            let film = fs.truncate();
             let lens = lens_offset(f, key);
             state[r] = UVec4::new(pixel, next, 0, done);
             ray_o[r] = camera_origin(f, film, lens).extend(0.0);
             ray_d[r] = camera_dir(f, film, lens).extend(0.0);
-            beta[r] = CAMERA_BETA;
+            beta[r] = camera_beta(fs.w);
             flags[i] = 0;
         }
         if I::NEE {

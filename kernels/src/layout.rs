@@ -46,6 +46,8 @@ pub const TWO_SIDED: u32 = 1;
 pub const EMITTER: u32 = 2;
 /// Plastic: Mitsuba's `nonlinear` (internal scattering shifts the base's colour).
 pub const NONLINEAR: u32 = 4;
+/// `Material::flags`: a rough conductor's microfacets follow Beckmann (else GGX).
+pub const BECKMANN: u32 = 8;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
@@ -55,9 +57,13 @@ pub struct Material {
     pub kind: u32,
     pub emission: Vec3,
     pub flags: u32,
+    /// Dielectric specular transmittance, plastic specular reflectance, or conductor eta.
     pub transmittance: Vec3,
-    /// GGX alpha (rough conductor) or int_ior / ext_ior (dielectric, plastic).
+    /// Microfacet alpha (rough conductor) or int_ior / ext_ior (dielectric, plastic).
     pub param: f32,
+    /// Conductor k: the imaginary part of its complex index `transmittance + i k`.
+    pub conductor_k: Vec3,
+    pub pad: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.
@@ -116,7 +122,9 @@ pub struct Frame {
     /// run, an independent stream per shard, so that shards do not repeat each other's
     /// group draws.
     pub group_seed: u32,
-    pub pad2: u32,
+    /// Pixels sampled beyond each edge of the image with a reconstruction filter (Mitsuba's
+    /// `sample_border`; 0: camera rays stay on the image).
+    pub filter_border: u32,
     /// 1: Mitsuba's `hide_emitters`: camera rays pass through emitter surfaces and do not
     /// see the environment.
     pub hide_emitters: u32,
@@ -137,7 +145,10 @@ pub struct Frame {
     /// 1: triangles carry per-vertex shading normals (`extend`'s `shading_normals`), which
     /// Mitsuba interpolates for shading; 0: every triangle shades with its face normal.
     pub shading_normals: u32,
-    pub pad5: u32,
+    /// Radius in pixels of the reconstruction filter whose table `extend` reads as
+    /// `film_filter` (`cohort_scenes::FilmFilter::table`); 0: the box filter, each camera
+    /// ray uniform in its own pixel.
+    pub filter_radius: f32,
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`

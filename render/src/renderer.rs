@@ -304,6 +304,9 @@ impl RenderStats {
 /// Path state, structure of arrays, one entry per ray slot.
 struct Paths {
     slot_pixel: GpuBuffer<u32>,
+    /// The camera's reconstruction filter as `extend::film_sample` reads it
+    /// (`cohort_scenes::FilmFilter::table`; one unused zero for the box).
+    film_filter: GpuBuffer<f32>,
     idrays: [GpuBuffer<u32>; 2],
     state: GpuBuffer<UVec4>,
     ray_o: GpuBuffer<Vec4>,
@@ -423,6 +426,8 @@ impl<'d> Renderer<'d> {
             lens_radius: f.lens_radius,
             focus_distance: f.focus_distance,
             shading_normals: gpu.has_shading_normals as u32,
+            filter_radius: camera.filter.map_or(0.0, |f| f.radius),
+            filter_border: camera.filter.map_or(0, |f| f.border()),
             environment: scene.environment,
             max_depth,
             zero_depth,
@@ -442,6 +447,10 @@ impl<'d> Renderer<'d> {
         let blocks = compact::scratch_len(n);
         let paths = Paths {
             slot_pixel: device.upload(&slot_to_pixel)?,
+            film_filter: match &camera.filter {
+                Some(filter) => device.upload(&filter.table())?,
+                None => device.upload(&[0.0f32])?,
+            },
             idrays: [device.alloc(n)?, device.alloc(n)?],
             state: device.alloc(n)?,
             ray_o: device.alloc(n)?,
@@ -569,6 +578,7 @@ impl<'d> Renderer<'d> {
             &spec_init,
             n,
             &self.frame,
+            &p.film_filter,
             &p.slot_pixel,
             &p.idrays[0],
             &p.state,
@@ -956,6 +966,7 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &p.hits,
         &scene.triangles,
         &scene.shading_normals,
+        &p.film_filter,
         &scene.materials,
         &scene.lights,
         &scene.delta_lights,

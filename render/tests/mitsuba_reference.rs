@@ -22,6 +22,7 @@ use std::path::PathBuf;
 use cohort::runtime::{BackendKind, Device};
 use cohort_render::input::read_exr;
 use cohort_render::{Budget, IntegratorKind, RenderOptions, Renderer, Roulette};
+use cohort_scenes::Scene;
 use glam::{Mat3, Vec3};
 
 /// Mitsuba's test budget: samples per image.
@@ -131,20 +132,36 @@ fn z_test(image: &[Vec3], spp: u32, reference: &[Vec3], variance: &[Vec3]) -> Ve
 
 /// Renders scene `name` on every backend and applies the test.
 fn check(name: &str) {
+    let verdicts = verdicts(name, |_| {});
+    assert!(!verdicts.is_empty(), "no backend available");
+    for (kind, v, mean, reference_mean) in verdicts {
+        assert!(
+            v.ok(),
+            "{name} on {kind:?}: only {} of {} pixel channels pass Mitsuba's test (need {:.2} %); image mean {mean}, reference mean {reference_mean}",
+            v.passed,
+            v.total,
+            100.0 * PASS_SHARE,
+        );
+    }
+}
+
+/// Mitsuba's test of scene `name`, changed by `change` after loading, on every backend:
+/// the verdict, the image's mean and the reference's mean.
+fn verdicts(name: &str, change: impl Fn(&mut Scene)) -> Vec<(BackendKind, Verdict, Vec3, Vec3)> {
     let xml = scene_dir().join(format!("{name}.xml"));
     let loaded = cohort_scenes::load_mitsuba(&xml).unwrap_or_else(|e| panic!("{e}"));
-    let scene = loaded.scene;
+    let mut scene = loaded.scene;
+    change(&mut scene);
     let reference = read_exr(&scene_dir().join(format!("{name}.mean.exr"))).unwrap();
     let variance = read_exr(&scene_dir().join(format!("{name}.var.exr"))).unwrap();
     let (w, h) = (reference.image.width, reference.image.height);
     assert_eq!((scene.camera.width, scene.camera.height), (w, h));
     let spp = (sample_budget() / (w * h)).max(1);
-    let mut backends = 0;
+    let mut out = Vec::new();
     for kind in [BackendKind::Wgpu, BackendKind::Vulkan] {
         let Some(device) = Device::for_tests(kind) else {
             continue;
         };
-        backends += 1;
         let opts = RenderOptions {
             integrator: IntegratorKind::Nee,
             roulette: Roulette::Mitsuba,
@@ -171,17 +188,9 @@ fn check(name: &str) {
             img.mean(),
             reference.image.mean()
         );
-        assert!(
-            v.ok(),
-            "{name} on {kind:?}: only {} of {} pixel channels pass Mitsuba's test (need {:.2} %); image mean {}, reference mean {}",
-            v.passed,
-            v.total,
-            100.0 * PASS_SHARE,
-            img.mean(),
-            reference.image.mean()
-        );
+        out.push((kind, v, img.mean(), reference.image.mean()));
     }
-    assert!(backends > 0, "no backend available");
+    out
 }
 
 /// The test must be able to fail: the reference scaled by 1.1 is rejected against itself.
@@ -278,4 +287,39 @@ fn serialized_meshes() {
 #[test]
 fn analytic_shapes_tessellated_and_smooth() {
     check("analytic_shapes");
+}
+
+#[test]
+fn gaussian_filter_by_default() {
+    check("filter_gaussian");
+}
+
+/// The filter matters at this budget: the same scene box-filtered fails the test.
+#[test]
+fn a_box_filter_fails_where_mitsuba_filters() {
+    let verdicts = verdicts("filter_gaussian", |scene| scene.camera.filter = None);
+    assert!(!verdicts.is_empty(), "no backend available");
+    for (kind, v, _, _) in verdicts {
+        assert!(
+            !v.ok(),
+            "box filter on {kind:?}: {} of {} pass",
+            v.passed,
+            v.total
+        );
+    }
+}
+
+#[test]
+fn tent_filter_sampled_beyond_the_border() {
+    check("filter_tent_border");
+}
+
+#[test]
+fn conductors_by_material_name_and_by_eta_k() {
+    check("conductor");
+}
+
+#[test]
+fn rough_conductors_beckmann_and_ggx() {
+    check("roughconductor");
 }

@@ -2,6 +2,7 @@
 //! `hdrfilm`), and the small frame the renderer's camera-ray kernel needs. Sources build it from a
 //! `to_world` transform; the renderer reads [`Camera::frame`].
 
+use crate::film_filter::FilmFilter;
 use glam::{Mat4, Vec2, Vec3};
 
 /// Which image extent `fov` spans (Mitsuba's `fov_axis`).
@@ -67,6 +68,8 @@ pub struct Camera {
     /// Mitsuba's film crop window: only this part of a larger film is rendered, and
     /// `width` x `height` is its size (the field of view and the aspect are the film's).
     pub crop: Option<CropWindow>,
+    /// Mitsuba's reconstruction filter (`None`: the box, each sample in its own pixel).
+    pub filter: Option<FilmFilter>,
 }
 
 /// The position of the rendered rectangle in the full film, in pixels.
@@ -122,6 +125,7 @@ impl Camera {
             aperture_radius: 0.0,
             focus_distance: 1e4,
             crop: None,
+            filter: None,
         })
     }
 

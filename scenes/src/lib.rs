@@ -18,6 +18,7 @@ pub mod bvh;
 pub mod camera;
 pub mod embedded;
 pub mod error;
+pub mod film_filter;
 pub mod material;
 pub mod mesh;
 pub mod mitsuba;
@@ -36,6 +37,7 @@ pub use bvh::{
 pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhError};
 pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
+pub use film_filter::{FilmFilter, FilterKind};
 pub use material::{Bsdf, GpuMaterial, Material};
 pub use mesh::TriMesh;
 pub use mitsuba::{

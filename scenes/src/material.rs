@@ -9,12 +9,22 @@ pub enum Bsdf {
     /// Lambertian. One-sided, like Mitsuba: a hit on the back reflects nothing unless the material
     /// is [`Material::two_sided`].
     Diffuse { reflectance: Vec3 },
-    /// Perfect mirror (Mitsuba `conductor` with `material` = none: Fresnel factor 1).
-    Conductor { specular_reflectance: Vec3 },
-    /// GGX microfacet conductor, isotropic, no Fresnel (`material` = none).
+    /// Smooth conductor (Mitsuba `conductor`): mirror reflection weighted by the conductor
+    /// Fresnel factor of the complex index `eta + i k` (Mitsuba's default `material` = none
+    /// is eta 0, k 1: a factor of 1) times `specular_reflectance`.
+    Conductor {
+        specular_reflectance: Vec3,
+        eta: Vec3,
+        k: Vec3,
+    },
+    /// Microfacet conductor (Mitsuba `roughconductor`), isotropic, GGX or Beckmann, with the
+    /// same Fresnel factor as [`Bsdf::Conductor`].
     RoughConductor {
         alpha: f32,
+        distribution: Microfacet,
         specular_reflectance: Vec3,
+        eta: Vec3,
+        k: Vec3,
     },
     /// Smooth glass. Inside is the side the face normal points away from.
     Dielectric {
@@ -35,6 +45,17 @@ pub enum Bsdf {
         nonlinear: bool,
     },
 }
+
+/// A microfacet normal distribution (Mitsuba's `distribution`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Microfacet {
+    Ggx,
+    /// Mitsuba's default.
+    Beckmann,
+}
+
+/// Mitsuba's conductor `material` = none: eta 0, k 1, a Fresnel factor of 1.
+pub const PERFECT_CONDUCTOR: (Vec3, Vec3) = (Vec3::ZERO, Vec3::ONE);
 
 /// A BSDF plus, optionally, an area emitter on the same surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,17 +87,23 @@ impl Material {
         Material {
             bsdf: Bsdf::Conductor {
                 specular_reflectance,
+                eta: PERFECT_CONDUCTOR.0,
+                k: PERFECT_CONDUCTOR.1,
             },
             two_sided: false,
             emission: None,
         }
     }
 
+    /// A GGX rough conductor without Fresnel (`material` = none).
     pub fn rough_conductor(alpha: f32, specular_reflectance: Vec3) -> Self {
         Material {
             bsdf: Bsdf::RoughConductor {
                 alpha,
+                distribution: Microfacet::Ggx,
                 specular_reflectance,
+                eta: PERFECT_CONDUCTOR.0,
+                k: PERFECT_CONDUCTOR.1,
             },
             two_sided: false,
             emission: None,
@@ -111,25 +138,35 @@ impl Material {
 
     pub fn to_gpu(&self) -> GpuMaterial {
         let mut flags = 0;
+        let mut conductor_k = Vec3::ZERO;
         let (kind, color, transmittance, param) = match self.bsdf {
             Bsdf::Diffuse { reflectance } => (GpuMaterial::DIFFUSE, reflectance, Vec3::ZERO, 0.0),
             Bsdf::Conductor {
                 specular_reflectance,
-            } => (
-                GpuMaterial::CONDUCTOR,
-                specular_reflectance,
-                Vec3::ZERO,
-                0.0,
-            ),
+                eta,
+                k,
+            } => {
+                conductor_k = k;
+                (GpuMaterial::CONDUCTOR, specular_reflectance, eta, 0.0)
+            }
             Bsdf::RoughConductor {
                 alpha,
+                distribution,
                 specular_reflectance,
-            } => (
-                GpuMaterial::ROUGH_CONDUCTOR,
-                specular_reflectance,
-                Vec3::ZERO,
-                alpha,
-            ),
+                eta,
+                k,
+            } => {
+                conductor_k = k;
+                if distribution == Microfacet::Beckmann {
+                    flags |= GpuMaterial::FLAG_BECKMANN;
+                }
+                (
+                    GpuMaterial::ROUGH_CONDUCTOR,
+                    specular_reflectance,
+                    eta,
+                    alpha,
+                )
+            }
             Bsdf::Dielectric {
                 int_ior,
                 ext_ior,
@@ -171,11 +208,13 @@ impl Material {
             flags,
             transmittance: transmittance.to_array(),
             param,
+            conductor_k: conductor_k.to_array(),
+            pad: 0,
         }
     }
 }
 
-/// Packed material, 48 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
+/// Packed material, 64 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
 /// 16-byte slot):
 ///
 /// | offset | field | meaning |
@@ -183,9 +222,11 @@ impl Material {
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
 /// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic) |
-/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, else zero |
-/// | 44 | `param: f32` | GGX alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX) |
+/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
+/// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
+/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index), else zero |
+/// | 60 | `pad: u32` | zero |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -195,6 +236,8 @@ pub struct GpuMaterial {
     pub flags: u32,
     pub transmittance: [f32; 3],
     pub param: f32,
+    pub conductor_k: [f32; 3],
+    pub pad: u32,
 }
 
 impl GpuMaterial {
@@ -206,6 +249,7 @@ impl GpuMaterial {
     pub const FLAG_TWO_SIDED: u32 = 1;
     pub const FLAG_EMITTER: u32 = 2;
     pub const FLAG_NONLINEAR: u32 = 4;
+    pub const FLAG_BECKMANN: u32 = 8;
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 64);

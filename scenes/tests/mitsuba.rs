@@ -272,7 +272,7 @@ fn unsupported_features_warn_with_file_and_line() {
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
     </shape>
     <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>
-    <shape type="rectangle"><bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf></shape>
+    <shape type="rectangle"><bsdf type="roughconductor"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
     <wibble/>"#,
     );
     let dir = tmp_dir("warnings");
@@ -303,7 +303,7 @@ fn unsupported_features_warn_with_file_and_line() {
     );
     warned_at("roughness", "'roughness'");
     warned_at("envmap", "emitter 'envmap' is not supported");
-    warned_at("roughconductor", "beckmann");
+    warned_at("roughconductor", "anisotropic");
     warned_at("<wibble/>", "<wibble>");
     // The stand-in for roughplastic keeps its colour.
     let s = &loaded.scene;

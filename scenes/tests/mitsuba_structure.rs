@@ -304,7 +304,9 @@ fn refs_resolve_for_every_object_kind() {
     assert_eq!(
         bsdf(3).bsdf,
         Bsdf::Conductor {
-            specular_reflectance: Vec3::splat(0.7)
+            specular_reflectance: Vec3::splat(0.7),
+            eta: Vec3::ZERO,
+            k: Vec3::ONE,
         }
     );
     // The emitter by reference, and a shape added a second time by the top-level <ref>.
@@ -807,7 +809,6 @@ fn ignored_camera_and_film_parameters_warn() {
         "near_clip",
         "principal_point_offset_x",
         "luminance",
-        "gaussian",
         "stratified",
     ] {
         assert!(
@@ -818,4 +819,124 @@ fn ignored_camera_and_film_parameters_warn() {
     }
     let bad = xml.replace(r#"value="1"/>"#, r#"value="0"/>"#);
     assert!(load_mitsuba_str(&bad, ".").is_err());
+}
+
+/// Reconstruction filters as Mitsuba reads them: its default gaussian when a film names none,
+/// each filter's parameters, `sample_border`, and errors for values Mitsuba would refuse.
+#[test]
+fn reconstruction_filters() {
+    use cohort_scenes::{FilmFilter, FilterKind};
+    let film = |inner: &str| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/>{inner}</film></sensor><shape type="sphere"/></scene>"#
+        )
+    };
+    let filter = |inner: &str| {
+        load_mitsuba_str(&film(inner), ".")
+            .unwrap()
+            .scene
+            .camera
+            .filter
+    };
+    assert_eq!(filter(""), Some(FilmFilter::gaussian(0.5)));
+    assert_eq!(filter(r#"<rfilter type="box"/>"#), None);
+    let g = filter(r#"<rfilter type="gaussian"><float name="stddev" value="0.25"/></rfilter>"#)
+        .unwrap();
+    assert_eq!(
+        (g.kind, g.radius),
+        (FilterKind::Gaussian { stddev: 0.25 }, 1.0)
+    );
+    let t = filter(r#"<boolean name="sample_border" value="true"/><rfilter type="tent"><float name="radius" value="1.5"/></rfilter>"#).unwrap();
+    assert_eq!(
+        (t.kind, t.radius, t.sample_border, t.border()),
+        (FilterKind::Tent, 1.5, true, 1)
+    );
+    let m = filter(r#"<rfilter type="mitchell"><float name="B" value="0"/><float name="C" value="0.5"/></rfilter>"#).unwrap();
+    assert_eq!(m.values, FilmFilter::catmull_rom().values);
+    assert_eq!(
+        filter(r#"<rfilter type="lanczos"><integer name="lobes" value="2"/></rfilter>"#)
+            .unwrap()
+            .radius,
+        2.0
+    );
+    // No film at all: Mitsuba's default film, with its default filter.
+    let l = load_mitsuba_str(r#"<scene version="3.0.0"><integrator type="path"/><sensor type="perspective"/><shape type="sphere"/></scene>"#, ".").unwrap();
+    assert_eq!(l.scene.camera.filter, Some(FilmFilter::gaussian(0.5)));
+    for bad in [
+        r#"<rfilter type="gaussian"><float name="stddev" value="-1"/></rfilter>"#,
+        r#"<rfilter type="lanczos"><integer name="lobes" value="0"/></rfilter>"#,
+        r#"<rfilter type="tent"><float name="radius" value="0"/></rfilter>"#,
+    ] {
+        let e = load_mitsuba_str(&film(bad), ".").unwrap_err().to_string();
+        assert!(e.contains("rfilter"), "{e}");
+    }
+}
+
+/// Conductors as Mitsuba reads them: a `material` name gives its complex index (the values
+/// Mitsuba's RGB variants use, `scripts/conductor_iors.py`), `eta` and `k` give it directly
+/// (defaults 0 and 1), both together are an error, and the microfacet distribution defaults
+/// to Beckmann.
+#[test]
+fn conductor_materials_and_distributions() {
+    use cohort_scenes::material::Microfacet;
+    let load = |bsdf: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><shape type="sphere">{bsdf}</shape></scene>"#
+        );
+        load_mitsuba_str(&xml, ".").map(|l| l.scene.materials[0].bsdf)
+    };
+    let Bsdf::Conductor { eta, k, .. } =
+        load(r#"<bsdf type="conductor"><string name="material" value="Au"/></bsdf>"#).unwrap()
+    else {
+        panic!("not a conductor")
+    };
+    // Mitsuba 3.9.1, scalar_rgb: mi.traverse(conductor Au) eta.value, k.value.
+    assert!(
+        (eta - Vec3::new(0.143036, 0.375307, 1.44205))
+            .abs()
+            .max_element()
+            < 1e-5,
+        "{eta}"
+    );
+    assert!(
+        (k - Vec3::new(3.983, 2.38556, 1.60336)).abs().max_element() < 1e-5,
+        "{k}"
+    );
+    let Bsdf::Conductor { eta, k, .. } = load(r#"<bsdf type="conductor"><rgb name="eta" value="0.2, 0.9, 1.1"/><float name="k" value="3"/></bsdf>"#).unwrap() else {
+        panic!("not a conductor")
+    };
+    assert_eq!((eta, k), (Vec3::new(0.2, 0.9, 1.1), Vec3::splat(3.0)));
+    let Bsdf::RoughConductor {
+        distribution,
+        alpha,
+        ..
+    } = load(r#"<bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf>"#).unwrap()
+    else {
+        panic!("not a rough conductor")
+    };
+    assert_eq!((distribution, alpha), (Microfacet::Beckmann, 0.3));
+    let Bsdf::RoughConductor { distribution, .. } =
+        load(r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/></bsdf>"#)
+            .unwrap()
+    else {
+        panic!("not a rough conductor")
+    };
+    assert_eq!(distribution, Microfacet::Ggx);
+    for (bad, needle) in [
+        (
+            r#"<bsdf type="conductor"><string name="material" value="Au"/><float name="eta" value="1"/></bsdf>"#,
+            "not both",
+        ),
+        (
+            r#"<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>"#,
+            "unknown conductor material",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf>"#,
+            "distribution",
+        ),
+    ] {
+        let e = load(bad).unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
 }

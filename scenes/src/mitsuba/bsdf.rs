@@ -5,8 +5,9 @@
 use glam::Vec3;
 
 use crate::error::SceneError;
-use crate::material::Bsdf;
+use crate::material::{Bsdf, Microfacet, PERFECT_CONDUCTOR};
 
+use super::conductor_iors::CONDUCTOR_IORS;
 use super::diag::syntax;
 use super::plugins;
 use super::props::Obj;
@@ -85,41 +86,59 @@ fn ior(obj: &Obj, name: &str, default: f32) -> Result<f32, SceneError> {
     }
 }
 
-/// Conductors are only supported without Fresnel (`material` = none, Mitsuba's default); a named
-/// metal or eta/k is approximated by a perfect reflector tinted by `specular_reflectance`.
-fn conductor_material(ctx: &mut Ctx, obj: &Obj) -> Result<(), SceneError> {
-    let material = obj.string("material")?.unwrap_or_else(|| "none".into());
-    if material != "none" || obj.has("eta") || obj.has("k") {
-        ctx.diag.warn(
-            &obj.loc,
-            format!(
-                "conductor Fresnel (material '{material}', eta/k) is not supported: treated as material 'none' (F = 1)"
-            ),
-        );
+/// A conductor's complex index of refraction (eta, k), as Mitsuba reads it: `eta` and `k`
+/// (defaults 0 and 1, a Fresnel factor of 1) or a `material` name (default none), not both.
+fn conductor_ior<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Vec3, Vec3), SceneError> {
+    let material = obj.string("material")?;
+    let explicit = obj.has("eta");
+    match material.as_deref() {
+        None | Some("none") => {
+            let eta = ctx.color(obj, "eta")?.unwrap_or(PERFECT_CONDUCTOR.0);
+            let k = ctx.color(obj, "k")?.unwrap_or(PERFECT_CONDUCTOR.1);
+            Ok((eta, k))
+        }
+        Some(name) => {
+            if explicit {
+                return Err(syntax(
+                    obj.loc_of("eta"),
+                    "give either 'eta' and 'k' or 'material', not both (as Mitsuba)",
+                ));
+            }
+            match CONDUCTOR_IORS.iter().find(|(n, _, _)| *n == name) {
+                Some((_, eta, k)) => {
+                    obj.ignore("k");
+                    Ok((Vec3::from(*eta), Vec3::from(*k)))
+                }
+                None => Err(syntax(
+                    obj.loc_of("material"),
+                    format!(
+                        "unknown conductor material '{name}' (Mitsuba's names: {})",
+                        CONDUCTOR_IORS
+                            .iter()
+                            .map(|(n, _, _)| *n)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )),
+            }
+        }
     }
-    obj.ignore("eta");
-    obj.ignore("k");
-    Ok(())
+}
+
+/// A microfacet distribution's name (Mitsuba's default: beckmann).
+fn distribution(obj: &Obj) -> Result<Microfacet, SceneError> {
+    match obj.string("distribution")?.as_deref() {
+        None | Some("beckmann") => Ok(Microfacet::Beckmann),
+        Some("ggx") => Ok(Microfacet::Ggx),
+        Some(other) => Err(syntax(
+            obj.loc_of("distribution"),
+            format!("microfacet distribution '{other}' is not one of beckmann, ggx"),
+        )),
+    }
 }
 
 /// Microfacet roughness: isotropic `alpha` (default 0.1) or `alpha_u` and `alpha_v` together.
 fn alpha(ctx: &mut Ctx, obj: &Obj) -> Result<f32, SceneError> {
-    let distribution = obj
-        .string("distribution")?
-        .unwrap_or_else(|| "beckmann".into());
-    match distribution.as_str() {
-        "ggx" => {}
-        "beckmann" => ctx.diag.warn(
-            &obj.loc,
-            "microfacet distribution 'beckmann' (Mitsuba's default) approximated by ggx",
-        ),
-        other => {
-            return Err(syntax(
-                obj.loc_of("distribution"),
-                format!("microfacet distribution '{other}' is not one of beckmann, ggx"),
-            ))
-        }
-    }
     let _ = obj.boolean("sample_visible")?;
     let alpha = match (obj.float("alpha_u")?, obj.float("alpha_v")?) {
         (Some(u), Some(v)) => {
@@ -171,13 +190,16 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             reflectance: color(ctx, "reflectance", 0.5)?,
         },
         "conductor" => {
-            conductor_material(ctx, obj)?;
+            let (eta, k) = conductor_ior(ctx, obj)?;
             Bsdf::Conductor {
                 specular_reflectance: color(ctx, "specular_reflectance", 1.0)?,
+                eta,
+                k,
             }
         }
         "roughconductor" => {
-            conductor_material(ctx, obj)?;
+            let (eta, k) = conductor_ior(ctx, obj)?;
+            let distribution = distribution(obj)?;
             let alpha = alpha(ctx, obj)?;
             let specular_reflectance = color(ctx, "specular_reflectance", 1.0)?;
             if alpha == 0.0 {
@@ -187,11 +209,16 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
                 );
                 Bsdf::Conductor {
                     specular_reflectance,
+                    eta,
+                    k,
                 }
             } else {
                 Bsdf::RoughConductor {
                     alpha,
+                    distribution,
                     specular_reflectance,
+                    eta,
+                    k,
                 }
             }
         }

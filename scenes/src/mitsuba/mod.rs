@@ -17,6 +17,7 @@
 
 mod bsdf;
 mod cie_tables;
+mod conductor_iors;
 mod diag;
 mod emitter;
 mod plugins;
@@ -36,6 +37,7 @@ use glam::{Mat4, Vec3};
 use crate::builder::SceneBuilder;
 use crate::camera::{Camera, CropWindow, FovAxis, Projection};
 use crate::error::{SceneError, Warning};
+use crate::film_filter::FilmFilter;
 use crate::scene::{Integrator, Scene};
 
 pub use bsdf::named_ior;
@@ -343,6 +345,7 @@ fn default_camera() -> Camera {
         aperture_radius: 0.0,
         focus_distance: 1e4,
         crop: None,
+        filter: None,
     }
 }
 
@@ -478,6 +481,7 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
         aperture_radius: 0.0,
         focus_distance: 1e4,
         crop: None,
+        filter: None,
     })
 }
 
@@ -518,6 +522,7 @@ fn read_film_and_sampler<'a>(
 ) -> Result<FilmAndSampler, SceneError> {
     let (mut width, mut height, mut spp) = (768, 576, 4);
     let mut crop = None;
+    let mut filter = None;
     let mut saw_film = false;
     for child in &obj.children {
         let c = ctx.target(child)?;
@@ -555,25 +560,22 @@ fn read_film_and_sampler<'a>(
                     "file_format",
                     "banner",
                     "compensate",
-                    "sample_border",
                 ] {
                     c.ignore(name);
                 }
-                let mut saw_filter = false;
+                let sample_border = c.boolean("sample_border")?.unwrap_or(false);
+                // Mitsuba's default filter.
+                filter = Some(FilmFilter::gaussian(0.5));
                 for f in &c.children {
                     let fo = ctx.target(f)?;
                     if fo.tag != "rfilter" {
                         continue;
                     }
                     f.take();
-                    saw_filter = true;
-                    rfilter(ctx, fo)?;
+                    filter = rfilter(ctx, fo)?;
                 }
-                if !saw_filter {
-                    ctx.diag.warn(
-                        &c.loc,
-                        "film has no rfilter (Mitsuba's default is gaussian); the renderer uses box",
-                    );
+                if let Some(f) = &mut filter {
+                    f.sample_border = sample_border;
                 }
                 if !quiet {
                     c.finish(&mut ctx.diag)?;
@@ -624,18 +626,24 @@ fn read_film_and_sampler<'a>(
             "sensor has no film; Mitsuba's default 768 x 576 is used",
         );
     }
+    if !saw_film {
+        // Mitsuba's default film filters with its default gaussian.
+        filter = Some(FilmFilter::gaussian(0.5));
+    }
     Ok(match crop {
         Some((w, h, window)) => FilmAndSampler {
             width: w,
             height: h,
             spp,
             crop: Some(window),
+            filter,
         },
         None => FilmAndSampler {
             width,
             height,
             spp,
             crop: None,
+            filter,
         },
     })
 }
@@ -647,6 +655,7 @@ struct FilmAndSampler {
     height: u32,
     spp: u32,
     crop: Option<CropWindow>,
+    filter: Option<FilmFilter>,
 }
 
 impl FilmAndSampler {
@@ -656,6 +665,7 @@ impl FilmAndSampler {
             width: self.width,
             height: self.height,
             crop: self.crop,
+            filter: self.filter,
             ..camera
         };
         (camera, self.spp)
@@ -707,30 +717,46 @@ fn read_crop(
     )))
 }
 
-fn rfilter(ctx: &mut Ctx, f: &Obj) -> Result<(), SceneError> {
-    match f.plugin.as_str() {
-        "box" => {}
-        "gaussian" | "tent" | "lanczos" | "mitchell" | "catmullrom" => {
-            ctx.diag.warn(
-                &f.loc,
-                format!(
-                    "rfilter '{}' replaced by box (the renderer splats each sample into its own pixel)",
-                    f.plugin
-                ),
-            );
-            for name in ["stddev", "radius", "lobes", "B", "C"] {
-                f.ignore(name);
+/// Mitsuba's `<rfilter>`: `None` for the box (each sample in its own pixel).
+fn rfilter(ctx: &mut Ctx, f: &Obj) -> Result<Option<FilmFilter>, SceneError> {
+    let positive = |name: &str, default: f32| -> Result<f32, SceneError> {
+        let v = f.float(name)?.unwrap_or(default);
+        if v > 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(syntax(
+                f.loc_of(name),
+                format!("rfilter {name} must be positive"),
+            ))
+        }
+    };
+    let filter = match f.plugin.as_str() {
+        "box" => None,
+        "gaussian" => Some(FilmFilter::gaussian(positive("stddev", 0.5)?)),
+        "tent" => Some(FilmFilter::tent(positive("radius", 1.0)?)),
+        "mitchell" => Some(FilmFilter::mitchell(
+            f.float("B")?.unwrap_or(1.0 / 3.0),
+            f.float("C")?.unwrap_or(1.0 / 3.0),
+        )),
+        "catmullrom" => Some(FilmFilter::catmull_rom()),
+        "lanczos" => {
+            let lobes = f.integer("lobes")?.unwrap_or(3);
+            if !(1..=64).contains(&lobes) {
+                return Err(syntax(f.loc_of("lobes"), "rfilter lobes must be in 1..=64"));
             }
+            Some(FilmFilter::lanczos(lobes as u32))
         }
         other => {
-            return ctx.diag.unsupported(
+            ctx.diag.unsupported(
                 &f.loc,
                 plugins::describe("rfilter", other),
                 "replaced by box",
-            )
+            )?;
+            return Ok(None);
         }
-    }
-    f.finish(&mut ctx.diag)
+    };
+    f.finish(&mut ctx.diag)?;
+    Ok(filter)
 }
 
 /// The integrator the renderer follows: `path` (and what renders the same image as `path`), or
