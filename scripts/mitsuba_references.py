@@ -97,6 +97,45 @@ def scene(integrator, body, camera=PERSPECTIVE):
 """
 
 
+def write_png(path):
+    """A 16 x 12 8-bit sRGB PNG (written here with zlib, no imaging library): colour stripes
+    with a diagonal, so that orientation, filtering and wrapping all show."""
+    import struct
+    import zlib
+
+    w, h = 16, 12
+    rows = b""
+    for y in range(h):
+        row = bytearray([0])  # filter type: none
+        for x in range(w):
+            r = 230 if (x // 4) % 2 == 0 else 40
+            g = 200 if y < h // 2 else 60
+            b = 220 if x == y else 30 + 10 * x
+            row += bytes([r, g, b])
+        rows += bytes(row)
+
+    def chunk(kind, data):
+        c = struct.pack(">I", len(data)) + kind + data
+        return c + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    png = b"\x89PNG\r\n\x1a\n"
+    png += chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(rows))
+    png += chunk(b"IEND", b"")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(png)
+
+
+def write_textured_obj(path):
+    """A unit quad in z = 0 (two triangles) with texture coordinates running 0..2 in u and
+    0..1 in v, so that Mitsuba's flip of an OBJ's v and the repeat wrap both show."""
+    with open(path, "w") as f:
+        f.write("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n")
+        f.write("vt 0 0\nvt 2 0\nvt 2 1\nvt 0 1\n")
+        f.write("f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+
+
 def write_serialized(path):
     """A two-shape Mitsuba `.serialized` file (format 0x041C, version 4), written here so that
     the reader is checked against Mitsuba's: shape 0 an octahedron with vertex normals, single
@@ -338,6 +377,62 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Textures: checkerboards on the rectangle (the floor, scaled by to_uv), on the cube's
+    # faces and on a sphere; a PNG bitmap (textures/stripes.png, see write_png) on the back
+    # wall (bilinear), on an OBJ quad with its own texture coordinates, and as a plastic's
+    # diffuse reflectance on the cube (nearest, clamp).
+    "checkerboard": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="rectangle">
+        <transform name="to_world"><scale value="0.9"/><rotate x="1" angle="-90"/><translate y="0.01"/></transform>
+        <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+            <rgb name="color0" value="0.8, 0.7, 0.2"/><rgb name="color1" value="0.1, 0.2, 0.6"/>
+            <transform name="to_uv"><scale x="4" y="3"/><translate x="0.1"/></transform>
+        </texture></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.45, 0.45, 0.1"/><float name="radius" value="0.3"/>
+        <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+            <transform name="to_uv"><scale x="8" y="4"/></transform>
+        </texture></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="-35"/><rotate x="1" angle="20"/><translate x="0.45" y="0.95" z="-0.3"/></transform>
+        <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+            <rgb name="color0" value="0.9, 0.3, 0.3"/><rgb name="color1" value="0.9, 0.9, 0.9"/>
+            <transform name="to_uv"><scale value="3"/></transform>
+        </texture></bsdf>
+    </shape>""",
+    ),
+    "bitmap": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<texture type="bitmap" id="stripes"><string name="filename" value="textures/stripes.png"/></texture>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.8"/><translate y="1" z="-0.99"/></transform>
+        <bsdf type="diffuse"><ref name="reflectance" id="stripes"/></bsdf>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="meshes/textured_quad.obj"/>
+        <transform name="to_world"><scale x="0.5" y="0.3"/><rotate y="1" angle="40"/><translate x="-0.5" y="0.5" z="0.1"/></transform>
+        <bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+            <string name="filename" value="textures/stripes.png"/>
+        </texture></bsdf></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="-30"/><translate x="0.45" y="0.25" z="0.1"/></transform>
+        <bsdf type="plastic">
+            <texture type="bitmap" name="diffuse_reflectance">
+                <string name="filename" value="textures/stripes.png"/>
+                <string name="filter_type" value="nearest"/><string name="wrap_mode" value="clamp"/>
+                <transform name="to_uv"><scale value="1.5"/><translate x="-0.25" y="-0.25"/></transform>
+            </texture>
+        </bsdf>
+    </shape>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",
@@ -387,6 +482,8 @@ def main():
     names = a.names or list(SCENES)
     os.makedirs(OUT, exist_ok=True)
     write_serialized(os.path.join(OUT, "meshes", "shapes.serialized"))
+    write_textured_obj(os.path.join(OUT, "meshes", "textured_quad.obj"))
+    write_png(os.path.join(OUT, "textures", "stripes.png"))
     for name in names:
         xml = SCENES[name]
         with open(os.path.join(OUT, f"{name}.xml"), "w") as f:

@@ -19,6 +19,7 @@ use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
+use crate::texture::{hit_uv, texture_eval};
 use cohort::prelude::*;
 
 /// Bins of the reconstruction filter's table across `[-radius, radius]`
@@ -248,6 +249,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     hits: &[Vec4],
     tris: &[Triangle],
     shading_normals: &[Vec4],
+    tex_coords: &[Vec4],
+    textures: &[Vec4],
     film_filter: &[f32],
     materials: &[Material],
     lights: &[LightEntry],
@@ -388,8 +391,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     l += thr * m.emission * w;
                 }
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
+                // The diffuse colour (diffuse, plastic): the material's, or its texture's here.
+                let mut albedo = m.color;
+                if m.texture != 0 {
+                    albedo =
+                        texture_eval(textures, m.texture - 1, hit_uv(tex_coords, t.original, h));
+                }
                 let diffuse =
-                    m.kind == DIFFUSE && (front || two_sided) && m.color.max_element() > 0.0;
+                    m.kind == DIFFUSE && (front || two_sided) && albedo.max_element() > 0.0;
                 // Conductors are one-sided, as in Mitsuba: the back absorbs.
                 let glossy = m.kind == ROUGH_CONDUCTOR && (front || two_sided);
                 let plastic = m.kind == PLASTIC && (front || two_sided);
@@ -461,7 +470,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             let pdf_b: f32;
                             if diffuse {
                                 let c = wi.dot(n).max(0.0);
-                                fc = m.color * (c * core::f32::consts::FRAC_1_PI);
+                                fc = albedo * (c * core::f32::consts::FRAC_1_PI);
                                 pdf_b = c * core::f32::consts::FRAC_1_PI;
                             } else if plastic {
                                 // The coating's delta reflection cannot meet a light sample:
@@ -470,8 +479,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 let f_i = fresnel_dielectric(-d.dot(n), m.param);
                                 let f_o = fresnel_dielectric(c, m.param);
                                 let p_spec =
-                                    plastic_specular_probability(f_i, m.color, m.transmittance);
-                                let base = plastic_base(m.color, m.param, m.flags & NONLINEAR != 0);
+                                    plastic_specular_probability(f_i, albedo, m.transmittance);
+                                let base = plastic_base(albedo, m.param, m.flags & NONLINEAR != 0);
                                 fc = base
                                     * ((1.0 - f_i)
                                         * (1.0 - f_o)
@@ -510,7 +519,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 } else if diffuse {
                     let s = S::sample(n, u, shared_patch, f.patches_n);
                     new_d = s.truncate();
-                    thr = thr * m.color * s.w;
+                    thr = thr * albedo * s.w;
                     alive = true;
                     // MIS weights use the cosine density whatever strategy S drew the
                     // direction: every strategy covers the whole hemisphere (over the
@@ -523,7 +532,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // diffuse scattering, chosen by their Fresnel-weighted mean albedos.
                     let cos_i = -d.dot(n);
                     let f_i = fresnel_dielectric(cos_i, m.param);
-                    let p_spec = plastic_specular_probability(f_i, m.color, m.transmittance);
+                    let p_spec = plastic_specular_probability(f_i, albedo, m.transmittance);
                     if uniform(key, 4) < p_spec {
                         new_d = d + n * (2.0 * cos_i);
                         thr = thr * m.transmittance * (f_i / p_spec);
@@ -532,7 +541,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         new_d = s.truncate();
                         let c = new_d.dot(n).max(0.0);
                         let f_o = fresnel_dielectric(c, m.param);
-                        let base = plastic_base(m.color, m.param, m.flags & NONLINEAR != 0);
+                        let base = plastic_base(albedo, m.param, m.flags & NONLINEAR != 0);
                         thr = thr * base * ((1.0 - f_i) * (1.0 - f_o) / (1.0 - p_spec) * s.w);
                         // As for diffuse bounces: cosine densities whatever S drew.
                         bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;

@@ -63,7 +63,9 @@ pub struct Material {
     pub param: f32,
     /// Conductor k: the imaginary part of its complex index `transmittance + i k`.
     pub conductor_k: Vec3,
-    pub pad: u32,
+    /// Index + 1 of the header of the texture that replaces `color` (diffuse, plastic) in
+    /// `extend`'s `textures` (`cohort_kernels::texture`); 0: `color` everywhere.
+    pub texture: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.

@@ -25,6 +25,7 @@ pub mod path_end;
 pub mod rng;
 pub mod sampling;
 pub mod shadow;
+pub mod texture;
 pub mod traverse;
 pub mod traverse_cw;
 pub mod traverse_wide;

@@ -15,6 +15,11 @@ pub struct GpuScene {
     pub shading_normals: GpuBuffer<glam::Vec4>,
     /// Whether `shading_normals` holds the scene's normals.
     pub has_shading_normals: bool,
+    /// Texture coordinates, 2 per triangle in the scene's order ((u0, v0, u1, v1), (u2, v2)),
+    /// where a material is textured; else one zero element.
+    pub tex_coords: GpuBuffer<glam::Vec4>,
+    /// Every texture (`cohort_scenes::Scene::gpu_textures`), or one zero element.
+    pub textures: GpuBuffer<glam::Vec4>,
     pub triangle_count: usize,
     /// Next-event estimation's alias table over the emitter triangles (`crate::lights`).
     pub lights: GpuBuffer<LightEntry>,
@@ -76,7 +81,37 @@ impl GpuScene {
             .flatten()
             .map(|n| n.extend(0.0))
             .collect();
+        // Texture coordinates only matter where a material reads a texture.
+        let textured = scene.materials.iter().any(|m| m.texture.is_some());
+        let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
+            (Some(uvs), true) => uvs
+                .chunks_exact(3)
+                .flat_map(|c| {
+                    [
+                        glam::Vec4::new(c[0].x, c[0].y, c[1].x, c[1].y),
+                        glam::Vec4::new(c[2].x, c[2].y, 0.0, 0.0),
+                    ]
+                })
+                .collect(),
+            // Textured meshes without coordinates: Mitsuba's barycentric (u, v).
+            (None, true) => (0..scene.triangles.len())
+                .flat_map(|_| {
+                    [
+                        glam::Vec4::new(0.0, 0.0, 1.0, 0.0),
+                        glam::Vec4::new(0.0, 1.0, 0.0, 0.0),
+                    ]
+                })
+                .collect(),
+            (_, false) => Vec::new(),
+        };
+        let textures: Vec<glam::Vec4> = scene
+            .gpu_textures()
+            .into_iter()
+            .map(glam::Vec4::from_array)
+            .collect();
         Ok(GpuScene {
+            tex_coords: upload(device, &tex_coords)?,
+            textures: upload(device, &textures)?,
             nodes: upload(device, nodes)?,
             triangles: upload(device, &tris)?,
             materials: upload(device, mats)?,

@@ -966,6 +966,8 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &p.hits,
         &scene.triangles,
         &scene.shading_normals,
+        &scene.tex_coords,
+        &scene.textures,
         &p.film_filter,
         &scene.materials,
         &scene.lights,

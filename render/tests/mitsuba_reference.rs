@@ -323,3 +323,35 @@ fn conductors_by_material_name_and_by_eta_k() {
 fn rough_conductors_beckmann_and_ggx() {
     check("roughconductor");
 }
+
+#[test]
+fn checkerboard_textures_on_rectangle_sphere_and_cube() {
+    check("checkerboard");
+}
+
+#[test]
+fn bitmap_textures_on_rectangle_obj_and_plastic() {
+    check("bitmap");
+}
+
+/// The textures matter at this budget: the same scenes with each texture replaced by its mean
+/// colour fail the test.
+#[test]
+fn textures_replaced_by_their_means_fail() {
+    for name in ["checkerboard", "bitmap"] {
+        let verdicts = verdicts(name, |scene| {
+            for m in &mut scene.materials {
+                m.texture = None;
+            }
+        });
+        assert!(!verdicts.is_empty(), "no backend available");
+        for (kind, v, _, _) in verdicts {
+            assert!(
+                !v.ok(),
+                "{name} untextured on {kind:?}: {} of {} pass",
+                v.passed,
+                v.total
+            );
+        }
+    }
+}

@@ -54,6 +54,7 @@ fn white_furnace() {
         },
         two_sided: true,
         emission: Some(Vec3::splat(le)),
+        texture: None,
     });
     b.add_mesh(
         "box",

@@ -89,6 +89,9 @@ impl SceneBuilder {
         if vertex_normals.is_some() && self.scene.triangles.normals.is_none() {
             self.backfill_face_normals();
         }
+        if mesh.uvs.is_some() && self.scene.triangles.uvs.is_none() {
+            self.scene.triangles.uvs = Some(BARYCENTRIC_UVS.repeat(self.scene.triangles.len()));
+        }
 
         let tris = &mut self.scene.triangles;
         let first = tris.len() as u32;
@@ -104,6 +107,12 @@ impl SceneBuilder {
             let face = cross / area2.sqrt();
             tris.positions.extend_from_slice(&p);
             tris.materials.push(material);
+            if let Some(uvs) = &mut tris.uvs {
+                match &mesh.uvs {
+                    Some(m) => uvs.extend(t.map(|i| m[i as usize])),
+                    None => uvs.extend(BARYCENTRIC_UVS),
+                }
+            }
             if let Some(normals) = &mut tris.normals {
                 match &vertex_normals {
                     Some(vn) => normals.extend(t.map(|i| {
@@ -142,3 +151,7 @@ impl SceneBuilder {
         self.scene.triangles.normals = Some(normals);
     }
 }
+
+/// Texture coordinates of a triangle of a mesh without any: interpolated, they are the
+/// barycentric coordinates of the second and third vertex, Mitsuba's.
+const BARYCENTRIC_UVS: [glam::Vec2; 3] = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];

@@ -19,6 +19,7 @@ pub mod camera;
 pub mod embedded;
 pub mod error;
 pub mod film_filter;
+pub mod image_file;
 pub mod material;
 pub mod mesh;
 pub mod mitsuba;
@@ -28,6 +29,7 @@ pub mod ply;
 pub mod scene;
 pub mod serialized;
 pub mod shapes;
+pub mod texture;
 
 pub use builder::{Added, SceneBuilder, Shading};
 pub use bvh::{
@@ -46,3 +48,4 @@ pub use mitsuba::{
 };
 pub use morton::{morton2d_decode, morton2d_encode, morton_pixel_order};
 pub use scene::{Integrator, Light, Object, Scene, SceneStats, Triangles};
+pub use texture::Texture;

@@ -65,6 +65,9 @@ pub struct Material {
     pub two_sided: bool,
     /// Radiance of a Mitsuba `area` emitter: emitted only on the front (face-normal) side.
     pub emission: Option<Vec3>,
+    /// Index into [`crate::Scene::textures`] of the texture that gives the BSDF's colour
+    /// (diffuse `reflectance`, plastic `diffuse_reflectance`) where it is not a constant.
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -73,6 +76,7 @@ impl Material {
             bsdf: Bsdf::Diffuse { reflectance },
             two_sided: false,
             emission: None,
+            texture: None,
         }
     }
 
@@ -92,6 +96,7 @@ impl Material {
             },
             two_sided: false,
             emission: None,
+            texture: None,
         }
     }
 
@@ -107,6 +112,7 @@ impl Material {
             },
             two_sided: false,
             emission: None,
+            texture: None,
         }
     }
 
@@ -120,6 +126,7 @@ impl Material {
             },
             two_sided: false,
             emission: None,
+            texture: None,
         }
     }
 
@@ -209,7 +216,8 @@ impl Material {
             transmittance: transmittance.to_array(),
             param,
             conductor_k: conductor_k.to_array(),
-            pad: 0,
+            // Set by `Scene::gpu_materials`, which knows where the textures go.
+            texture: 0,
         }
     }
 }
@@ -226,7 +234,7 @@ impl Material {
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
 /// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index), else zero |
-/// | 60 | `pad: u32` | zero |
+/// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -237,7 +245,7 @@ pub struct GpuMaterial {
     pub transmittance: [f32; 3],
     pub param: f32,
     pub conductor_k: [f32; 3],
-    pub pad: u32,
+    pub texture: u32,
 }
 
 impl GpuMaterial {

@@ -3,13 +3,15 @@
 //! them into the scene's triangle soup. Indices are already validated here; readers reject bad
 //! ones with a file location before a `TriMesh` exists.
 
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals (same length as `positions`) when the source had them.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates (same length as `positions`) when the source had them.
+    pub uvs: Option<Vec<Vec2>>,
     /// Counter-clockwise = front.
     pub indices: Vec<[u32; 3]>,
 }
@@ -54,7 +56,7 @@ impl TriMesh {
         }
     }
 
-    /// Appends `other`. Normals survive only if both meshes have them.
+    /// Appends `other`. Normals and texture coordinates survive only if both meshes have them.
     pub fn append(&mut self, other: &TriMesh) {
         let base = self.positions.len() as u32;
         let had_positions = !self.positions.is_empty();
@@ -63,6 +65,11 @@ impl TriMesh {
             (None, Some(b)) if !had_positions => self.normals = Some(b.clone()),
             _ => self.normals = None,
         }
+        match (&mut self.uvs, &other.uvs) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            (None, Some(b)) if !had_positions => self.uvs = Some(b.clone()),
+            _ => self.uvs = None,
+        }
         self.positions.extend_from_slice(&other.positions);
         self.indices.extend(
             other
@@ -70,6 +77,66 @@ impl TriMesh {
                 .iter()
                 .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
         );
+    }
+
+    /// The mesh with texture coordinates `uv(p)` of each (object-space) vertex position, each
+    /// triangle given its own three vertices so that a coordinate that wraps around (the
+    /// `periodic` component, in [0, 1)) can be continued across the seam within a triangle. A
+    /// vertex where `uv` is undefined (a pole or an axis: `singular(p)`) takes the mean
+    /// periodic coordinate of the triangle's other vertices.
+    pub fn with_corner_uvs(
+        &self,
+        uv: impl Fn(Vec3) -> Vec2,
+        periodic: usize,
+        singular: impl Fn(Vec3) -> bool,
+    ) -> TriMesh {
+        // Shading normals of the welded mesh: unwelded, each triangle would see only itself.
+        let normals = self
+            .normals
+            .clone()
+            .unwrap_or_else(|| self.angle_weighted_normals());
+        let mut out = TriMesh {
+            normals: Some(Vec::new()),
+            uvs: Some(Vec::new()),
+            ..TriMesh::default()
+        };
+        for t in &self.indices {
+            let p = t.map(|i| self.positions[i as usize]);
+            let mut c = p.map(&uv);
+            let regular: Vec<usize> = (0..3).filter(|&k| !singular(p[k])).collect();
+            let lo = regular
+                .iter()
+                .map(|&k| c[k][periodic])
+                .fold(f32::INFINITY, f32::min);
+            let hi = regular
+                .iter()
+                .map(|&k| c[k][periodic])
+                .fold(f32::NEG_INFINITY, f32::max);
+            if hi - lo > 0.5 {
+                for &k in &regular {
+                    if c[k][periodic] < 0.5 {
+                        c[k][periodic] += 1.0;
+                    }
+                }
+            }
+            if !regular.is_empty() {
+                let mean =
+                    regular.iter().map(|&k| c[k][periodic]).sum::<f32>() / regular.len() as f32;
+                for k in 0..3 {
+                    if singular(p[k]) {
+                        c[k][periodic] = mean;
+                    }
+                }
+            }
+            let base = out.positions.len() as u32;
+            for k in 0..3 {
+                out.positions.push(p[k]);
+                out.normals.as_mut().unwrap().push(normals[t[k] as usize]);
+                out.uvs.as_mut().unwrap().push(c[k]);
+            }
+            out.indices.push([base, base + 1, base + 2]);
+        }
+        out
     }
 
     /// Angle-weighted vertex normals (Thürmer & Wüthrich), what Mitsuba computes for a mesh without

@@ -53,6 +53,14 @@ pub fn parse_obj(bytes: &[u8], file: &Path) -> Result<TriMesh, SceneError> {
         let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(Vec3::from_slice).collect();
         let normals = (m.normals.len() == m.positions.len() && !m.normals.is_empty())
             .then(|| m.normals.chunks_exact(3).map(Vec3::from_slice).collect());
+        // As in the file (Mitsuba's `flip_tex_coords` is applied by the scene loader).
+        let uvs =
+            (m.texcoords.len() / 2 == positions.len() && !m.texcoords.is_empty()).then(|| {
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|t| glam::Vec2::new(t[0], t[1]))
+                    .collect()
+            });
         let indices = m
             .indices
             .chunks_exact(3)
@@ -61,6 +69,7 @@ pub fn parse_obj(bytes: &[u8], file: &Path) -> Result<TriMesh, SceneError> {
         mesh.append(&TriMesh {
             positions,
             normals,
+            uvs,
             indices,
         });
     }

@@ -440,6 +440,7 @@ pub fn parse_ply(
         .map_or(0, |e| e.count);
     let mut mesh = TriMesh::new();
     let mut normals: Vec<Vec3> = Vec::new();
+    let mut uvs: Vec<glam::Vec2> = Vec::new();
     let mut list = Vec::new();
     let mut short_faces = 0u64;
 
@@ -457,6 +458,12 @@ pub fn parse_ply(
             "vertex" => {
                 let xyz = [find(&["x"]), find(&["y"]), find(&["z"])];
                 let nxyz = [find(&["nx"]), find(&["ny"]), find(&["nz"])];
+                // Texture coordinates under the names Mitsuba reads.
+                let uv = [
+                    find(&["u", "s", "texture_u", "texture_s"]),
+                    find(&["v", "t", "texture_v", "texture_t"]),
+                ];
+                let has_uvs = uv.iter().all(Option::is_some);
                 if xyz.iter().any(Option::is_none) {
                     return Err(syntax(
                         file,
@@ -472,6 +479,7 @@ pub fn parse_ply(
                     r.begin_entry("vertex", index)?;
                     let mut p = [0f32; 3];
                     let mut n = [0f32; 3];
+                    let mut t = [0f32; 2];
                     for (k, prop) in element.properties.iter().enumerate() {
                         match &prop.ty {
                             PropertyType::Scalar(ty) => {
@@ -480,6 +488,8 @@ pub fn parse_ply(
                                     p[axis] = v;
                                 } else if let Some(axis) = nxyz.iter().position(|&i| i == Some(k)) {
                                     n[axis] = v;
+                                } else if let Some(axis) = uv.iter().position(|&i| i == Some(k)) {
+                                    t[axis] = v;
                                 }
                             }
                             PropertyType::List { count, item } => {
@@ -500,9 +510,15 @@ pub fn parse_ply(
                     if has_normals {
                         normals.push(n);
                     }
+                    if has_uvs {
+                        uvs.push(glam::Vec2::from(t));
+                    }
                 }
                 if has_normals {
                     mesh.normals = Some(std::mem::take(&mut normals));
+                }
+                if has_uvs {
+                    mesh.uvs = Some(std::mem::take(&mut uvs));
                 }
             }
             "face" | "tristrips" => {

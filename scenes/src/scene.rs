@@ -29,6 +29,9 @@ pub struct Triangles {
     /// normal. When only some meshes are smooth, the flat ones carry their face normal three times,
     /// so the renderer never needs a per-triangle branch.
     pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinates, 3 per triangle, or `None` when no mesh has any. Triangles of meshes
+    /// without them carry (0, 0), (1, 0), (0, 1): their barycentric coordinates, as Mitsuba.
+    pub uvs: Option<Vec<glam::Vec2>>,
     /// Index into [`Scene::materials`], 1 per triangle.
     pub materials: Vec<u32>,
 }
@@ -132,6 +135,8 @@ pub struct Scene {
     pub integrator: Integrator,
     /// The sampler's sample count from the file; a placeholder the renderer may override.
     pub sample_count: u32,
+    /// Textures that materials refer to (`Material::texture`).
+    pub textures: Vec<crate::texture::Texture>,
 }
 
 /// Summary numbers, for logs and tests.
@@ -163,12 +168,30 @@ impl Scene {
             lights: Vec::new(),
             integrator: Integrator::default(),
             sample_count: 1,
+            textures: Vec::new(),
         }
     }
 
     /// Packed material table, indexed by [`crate::GpuTriangle::material`].
+    /// The materials in the kernels' layout; a textured one refers to its texture's header in
+    /// [`Scene::gpu_textures`] (`texture` = header index + 1, 0 without a texture).
     pub fn gpu_materials(&self) -> Vec<crate::GpuMaterial> {
-        self.materials.iter().map(Material::to_gpu).collect()
+        let starts = crate::texture::gpu_texture_starts(&self.textures);
+        self.materials
+            .iter()
+            .map(|m| {
+                let mut g = m.to_gpu();
+                if let Some(t) = m.texture {
+                    g.texture = starts[t as usize] + 1;
+                }
+                g
+            })
+            .collect()
+    }
+
+    /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`).
+    pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
+        crate::texture::gpu_textures(&self.textures).0
     }
 
     pub fn material_of(&self, triangle: usize) -> &Material {

@@ -10,7 +10,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::error::{ErrorKind, Location, SceneError};
 use crate::mesh::TriMesh;
@@ -258,9 +258,14 @@ fn parse_serialized(bytes: &[u8], path: &Path, index: u32) -> Result<TriMesh, Sc
     } else {
         None
     };
-    if flags & HAS_TEXCOORDS != 0 {
-        c.take(nv * 2 * real).ok_or_else(truncated)?;
-    }
+    let uvs = if flags & HAS_TEXCOORDS != 0 {
+        let uv: Option<Vec<Vec2>> = (0..nv)
+            .map(|_| Some(Vec2::new(c.real(double)?, c.real(double)?)))
+            .collect();
+        Some(uv.ok_or_else(truncated)?)
+    } else {
+        None
+    };
     if flags & HAS_COLORS != 0 {
         c.take(nv * 3 * real).ok_or_else(truncated)?;
     }
@@ -298,6 +303,7 @@ fn parse_serialized(bytes: &[u8], path: &Path, index: u32) -> Result<TriMesh, Sc
     Ok(TriMesh {
         positions,
         normals,
+        uvs,
         indices,
     })
 }

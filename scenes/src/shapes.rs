@@ -28,9 +28,17 @@ impl TriMesh {
     }
 }
 
-/// Mitsuba `rectangle`: [-1,1]^2 in the z = 0 plane, normal +z, 2 triangles.
+/// Mitsuba `rectangle`: [-1,1]^2 in the z = 0 plane, normal +z, 2 triangles; texture
+/// coordinates ((x + 1) / 2, (y + 1) / 2), as Mitsuba's.
 pub fn rectangle() -> TriMesh {
-    grid(1, 1)
+    let mut m = grid(1, 1);
+    m.uvs = Some(
+        m.positions
+            .iter()
+            .map(|p| Vec2::new(0.5 * p.x + 0.5, 0.5 * p.y + 0.5))
+            .collect(),
+    );
+    m
 }
 
 /// [-1,1]^2 in z = 0, normal +z, cut into `nx` x `ny` quads (2 triangles each).
@@ -77,7 +85,34 @@ pub fn cube() -> TriMesh {
         let d = m.push_vertex(n - u + v);
         m.push_quad(a, b, c, d);
     }
+    m.uvs = Some(
+        m.positions
+            .chunks(4)
+            .zip(CUBE_FACES)
+            .flat_map(|(face, (n, _, _))| face.iter().map(move |&p| cube_uv(n, p)))
+            .collect(),
+    );
     m
+}
+
+/// Texture coordinates of point `p` on the face of Mitsuba's cube with outward normal `n`
+/// (its mesh's, read back from the `mitsuba` package with ray queries).
+fn cube_uv(n: Vec3, p: Vec3) -> Vec2 {
+    let h = |x: f32| 0.5 * x + 0.5;
+    let (u, v) = if n == Vec3::Z {
+        (h(p.y), h(p.x))
+    } else if n == Vec3::NEG_Z {
+        (h(-p.y), h(p.x))
+    } else if n == Vec3::X {
+        (h(p.y), h(-p.z))
+    } else if n == Vec3::NEG_X {
+        (h(p.y), h(p.z))
+    } else if n == Vec3::Y {
+        (h(-p.x), h(-p.z))
+    } else {
+        (h(p.z), h(p.x))
+    };
+    Vec2::new(u, v)
 }
 
 /// [-1,1]^3 with every face cut into `n` x `n` quads: 12 n^2 triangles, outward.
@@ -186,6 +221,7 @@ pub fn icosphere(level: u32) -> TriMesh {
     }
     TriMesh {
         normals: Some(positions.clone()),
+        uvs: None,
         positions,
         indices: faces,
     }

@@ -622,7 +622,6 @@ const CASES: &[(&str, &str, Option<&str>)] = &[
 /// Cases where the loader deliberately refuses what Mitsuba renders, and why.
 const DELIBERATE: &[(&str, &str)] = &[
     ("moment_without_nested_integrator", "an aov/moment integrator without a nested integrator renders only extra channels, which the renderer cannot write"),
-    ("texture_checker", "textures are not supported by the renderer (strict); --lenient uses their mean colour"),
 ];
 
 fn write(dir: &Path, name: &str, text: &str) {

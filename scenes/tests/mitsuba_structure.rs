@@ -353,12 +353,14 @@ fn refs_resolve_for_every_object_kind() {
     assert!(e.message.contains("a -> b -> a"), "{e}");
 }
 
+/// Textures vary a diffuse reflectance (or a plastic's); elsewhere they are refused at their
+/// line (strict) or replaced by their mean colour (lenient); a missing image is an error.
 #[test]
 fn textures_in_bsdfs_strict_and_lenient() {
     let xml = scene(
         r#"<texture type="checkerboard" id="checks"/>
 <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="checks"/></bsdf></shape>
-<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="wood.png"/></texture></bsdf></shape>"#,
+<shape type="rectangle"><bsdf type="conductor"><ref name="specular_reflectance" id="checks"/></bsdf></shape>"#,
     );
     let e = load_mitsuba_str(&xml, ".").unwrap_err();
     assert_eq!(e.kind, ErrorKind::Unsupported);
@@ -370,21 +372,29 @@ fn textures_in_bsdfs_strict_and_lenient() {
     );
     let l = load_mitsuba_str_with(&xml, ".", &lenient()).unwrap();
     let s = &l.scene;
-    // Mitsuba's checkerboard defaults are 0.4 and 0.2: its mean is 0.3.
-    let r = |i: usize| s.materials[s.objects[i].material as usize].bsdf;
+    let m = |i: usize| &s.materials[s.objects[i].material as usize];
+    // The diffuse one reads the texture; the conductor its mean (Mitsuba's checkerboard
+    // defaults are 0.4 and 0.2).
+    assert_eq!(m(0).texture, Some(0));
+    assert_eq!(s.textures.len(), 1);
+    let cohort_scenes::Bsdf::Conductor {
+        specular_reflectance,
+        ..
+    } = m(1).bsdf
+    else {
+        panic!("not a conductor")
+    };
     assert_eq!(
-        r(0),
-        Bsdf::Diffuse {
-            reflectance: Vec3::splat(0.3)
-        }
+        (specular_reflectance, m(1).texture),
+        (Vec3::splat(0.3), None)
     );
-    assert_eq!(
-        r(1),
-        Bsdf::Diffuse {
-            reflectance: Vec3::splat(0.5)
-        }
+    assert!(l.warnings.iter().any(|w| w.message.contains("mean colour")));
+    let missing = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="wood.png"/></texture></bsdf></shape>"#,
     );
-    assert!(l.warnings.iter().any(|w| w.message.contains("wood.png")));
+    let e = load_mitsuba_str(&missing, ".").unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Io);
+    assert!(e.message.contains("wood.png"), "{e}");
 }
 
 #[test]

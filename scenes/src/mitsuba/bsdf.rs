@@ -28,6 +28,8 @@ pub(crate) const SUPPORTED: &[&str] = &[
 pub(crate) struct ParsedBsdf {
     pub bsdf: Bsdf,
     pub two_sided: bool,
+    /// The texture that gives the BSDF's colour (`Material::texture`).
+    pub texture: Option<u32>,
 }
 
 /// Mitsuba's default BSDF for shapes that name none.
@@ -36,6 +38,7 @@ pub(crate) const DEFAULT_BSDF: ParsedBsdf = ParsedBsdf {
         reflectance: Vec3::splat(0.5),
     },
     two_sided: false,
+    texture: None,
 };
 
 /// Mitsuba's named indices of refraction (`src/render/ior.h`).
@@ -185,10 +188,15 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
     let color = |ctx: &mut Ctx<'a>, name: &str, default: f32| -> Result<Vec3, SceneError> {
         Ok(ctx.color(obj, name)?.unwrap_or(Vec3::splat(default)))
     };
+    let mut texture = None;
     let bsdf = match obj.plugin.as_str() {
-        "diffuse" => Bsdf::Diffuse {
-            reflectance: color(ctx, "reflectance", 0.5)?,
-        },
+        "diffuse" => {
+            let (reflectance, t) = ctx
+                .color_or_texture(obj, "reflectance")?
+                .unwrap_or((Vec3::splat(0.5), None));
+            texture = t;
+            Bsdf::Diffuse { reflectance }
+        }
         "conductor" => {
             let (eta, k) = conductor_ior(ctx, obj)?;
             Bsdf::Conductor {
@@ -223,7 +231,11 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             }
         }
         "dielectric" => dielectric(ctx, obj)?,
-        "plastic" => plastic(ctx, obj)?,
+        "plastic" => {
+            let (b, t) = plastic(ctx, obj)?;
+            texture = t;
+            b
+        }
         "twosided" => return twosided(ctx, obj),
         _ => return stand_in(ctx, obj),
     };
@@ -231,6 +243,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
     Ok(ParsedBsdf {
         bsdf,
         two_sided: false,
+        texture,
     })
 }
 
@@ -252,15 +265,15 @@ fn dielectric<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
 
 /// Mitsuba `plastic`: a diffuse base under a smooth dielectric coating (defaults: diffuse
 /// 0.5, specular 1, polypropylene in air, linear).
-fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
+fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Bsdf, Option<u32>), SceneError> {
     let int_ior = ior(obj, "int_ior", 1.49)?;
     let ext_ior = ior(obj, "ext_ior", 1.000277)?;
     if !(int_ior > 0.0 && ext_ior > 0.0) {
         return Err(syntax(&obj.loc, "indices of refraction must be positive"));
     }
-    let diffuse_reflectance = ctx
-        .color(obj, "diffuse_reflectance")?
-        .unwrap_or(Vec3::splat(0.5));
+    let (diffuse_reflectance, texture) = ctx
+        .color_or_texture(obj, "diffuse_reflectance")?
+        .unwrap_or((Vec3::splat(0.5), None));
     let specular_reflectance = ctx.color(obj, "specular_reflectance")?.unwrap_or(Vec3::ONE);
     if diffuse_reflectance.max_element() + specular_reflectance.max_element() <= 0.0 {
         // Mitsuba samples the coating by the ratio of the two means, undefined at 0 / 0.
@@ -269,12 +282,13 @@ fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Bsdf, SceneError> {
             "plastic needs a non-zero diffuse_reflectance or specular_reflectance",
         ));
     }
-    Ok(Bsdf::Plastic {
+    let bsdf = Bsdf::Plastic {
         eta: int_ior / ext_ior,
         diffuse_reflectance,
         specular_reflectance,
         nonlinear: obj.boolean("nonlinear")?.unwrap_or(false),
-    })
+    };
+    Ok((bsdf, texture))
 }
 
 fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
@@ -318,6 +332,7 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     Ok(ParsedBsdf {
         bsdf: front.bsdf,
         two_sided: true,
+        texture: front.texture,
     })
 }
 
@@ -354,12 +369,14 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     let diffuse = |reflectance: Vec3| ParsedBsdf {
         bsdf: Bsdf::Diffuse { reflectance },
         two_sided: false,
+        texture: None,
     };
     let (parsed, instead) = match obj.plugin.as_str() {
         "roughdielectric" | "thindielectric" => {
             let b = ParsedBsdf {
                 bsdf: dielectric(ctx, obj)?,
                 two_sided: false,
+                texture: None,
             };
             (b, "replaced by a smooth dielectric with its IORs".to_string())
         }
@@ -372,6 +389,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
                     specular_transmittance: Vec3::ONE,
                 },
                 two_sided: false,
+                texture: None,
             },
             "replaced by an index-matched dielectric (invisible to paths, but it blocks light samples)"
                 .to_string(),

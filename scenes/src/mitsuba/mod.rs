@@ -24,6 +24,7 @@ mod plugins;
 mod props;
 mod shape;
 mod spectrum;
+mod texture;
 mod transform;
 
 use spectrum::SpectrumUse;
@@ -120,6 +121,9 @@ pub(crate) struct Ctx<'a> {
     pub bsdfs: HashMap<usize, ParsedBsdf>,
     /// Area emitters already attached to a shape, by object address.
     pub attached: Vec<usize>,
+    /// The scene's textures, and their index by object address.
+    pub textures: Vec<crate::texture::Texture>,
+    pub texture_ids: HashMap<usize, u32>,
 }
 
 impl<'a> Ctx<'a> {
@@ -133,6 +137,28 @@ impl<'a> Ctx<'a> {
                 .copied()
                 .ok_or_else(|| syntax(&c.loc, format!("<ref>: no object has id '{id}'"))),
         }
+    }
+
+    /// A colour parameter that may vary over the surface: a value, or a `checkerboard` or
+    /// `bitmap` texture (then its mean and its index in `textures`).
+    pub fn color_or_texture(
+        &mut self,
+        obj: &'a Obj,
+        name: &str,
+    ) -> Result<Option<(Vec3, Option<u32>)>, SceneError> {
+        if let Some(c) = obj
+            .children
+            .iter()
+            .find(|c| c.name.as_deref() == Some(name))
+        {
+            let t = self.target(c)?;
+            if t.tag == "texture" && texture::is_spatial(&t.plugin) {
+                c.take();
+                let i = texture::texture_index(self, t)?;
+                return Ok(Some((self.textures[i as usize].mean(), Some(i))));
+            }
+        }
+        Ok(self.color(obj, name)?.map(|c| (c, None)))
     }
 
     /// A colour parameter given as a value, or as a texture (nested or `<ref name=...>`); a
@@ -193,32 +219,22 @@ impl<'a> Ctx<'a> {
                 t.color("color")?
                     .ok_or_else(|| syntax(&t.loc, "texture 'srgb' needs a 'color'"))?
             }
-            "checkerboard" => {
-                let what = "texture 'checkerboard' is not supported (the renderer has no texture coordinates)";
-                if !self.diag.lenient {
-                    self.diag
-                        .unsupported(&t.loc, what, "replaced by its mean colour")?;
-                }
-                let c0 = self.color(t, "color0")?.unwrap_or(Vec3::splat(0.4));
-                let c1 = self.color(t, "color1")?.unwrap_or(Vec3::splat(0.2));
-                t.ignore("to_uv");
-                let mean = 0.5 * (c0 + c1);
+            plugin if texture::is_spatial(plugin) => {
+                let i = texture::texture_index(self, t)?;
+                let mean = self.textures[i as usize].mean();
                 self.diag.unsupported(
                     &t.loc,
-                    what,
+                    format!("a '{plugin}' texture here (textures vary only diffuse reflectance and plastic diffuse_reflectance)"),
                     format!("replaced by its mean colour {mean}"),
                 )?;
                 return Ok(mean);
             }
             other => {
-                let what = match t.string("filename") {
-                    Ok(Some(f)) if other == "bitmap" => format!(
-                        "texture 'bitmap' ('{f}') is not supported (the renderer has no texture coordinates)"
-                    ),
-                    _ => plugins::describe("texture", other),
-                };
-                self.diag
-                    .unsupported(&t.loc, what, "replaced by grey 0.5")?;
+                self.diag.unsupported(
+                    &t.loc,
+                    plugins::describe("texture", other),
+                    "replaced by grey 0.5",
+                )?;
                 return Ok(Vec3::splat(0.5));
             }
         };
@@ -255,6 +271,8 @@ fn build(mut diag: Diag, doc: &xml::Document) -> Result<(Scene, Vec<Warning>), S
         search: doc.search.clone(),
         bsdfs: HashMap::new(),
         attached: Vec::new(),
+        textures: Vec::new(),
+        texture_ids: HashMap::new(),
     };
     let scene = interpret(&mut ctx, &scene_obj)?;
     Ok((scene, ctx.diag.warnings))
@@ -323,6 +341,7 @@ fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> 
         Integrator::default()
     });
     let scene = builder.scene_mut();
+    scene.textures = std::mem::take(&mut ctx.textures);
     scene.camera = camera;
     scene.environment = emitters.environment.unwrap_or(Vec3::ZERO);
     scene.lights = emitters.lights;

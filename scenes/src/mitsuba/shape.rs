@@ -116,7 +116,8 @@ fn add_placed<'a>(
     let (mut mesh, shading, name) = match plugin {
         "obj" | "ply" | "serialized" => {
             let face_normals = obj.boolean("face_normals")?.unwrap_or(false);
-            let _ = obj.boolean("flip_tex_coords")?;
+            // Mitsuba flips v (v = 1 - v) of OBJ files by default.
+            let flip_tex_coords = obj.boolean("flip_tex_coords")?.unwrap_or(plugin == "obj");
             let shape_index = if plugin == "serialized" {
                 let i = obj.integer("shape_index")?.unwrap_or(0);
                 u32::try_from(i)
@@ -138,6 +139,12 @@ fn add_placed<'a>(
                 _ => crate::serialized::read_serialized(&path, shape_index),
             }
             .map_err(|e| e.referenced_from(outer))?;
+            let mut mesh = mesh;
+            if flip_tex_coords {
+                for uv in mesh.uvs.iter_mut().flatten() {
+                    uv.y = 1.0 - uv.y;
+                }
+            }
             let shading = if face_normals {
                 Shading::Flat
             } else {
@@ -147,7 +154,16 @@ fn add_placed<'a>(
         }
         "rectangle" => (shapes::rectangle(), Shading::Flat, "rectangle".to_string()),
         "cube" => (shapes::cube(), Shading::Flat, "cube".to_string()),
-        "disk" => (disk(), Shading::Flat, "disk".to_string()),
+        // Mitsuba's texture coordinates: (radius, angle / 2 pi).
+        "disk" => (
+            disk().with_corner_uvs(
+                |p| Vec2::new(p.truncate().length(), turn(p.y, p.x)),
+                1,
+                |p| p.truncate().length() < 1e-6,
+            ),
+            Shading::Flat,
+            "disk".to_string(),
+        ),
         "cylinder" => {
             let p0 = obj.vector("p0")?.unwrap_or(Vec3::ZERO);
             let p1 = obj.vector("p1")?.unwrap_or(Vec3::Z);
@@ -163,8 +179,11 @@ fn add_placed<'a>(
             let local = Mat4::from_translation(p0)
                 * Mat4::from_quat(Quat::from_rotation_arc(Vec3::Z, dir))
                 * Mat4::from_scale(Vec3::new(radius, radius, axis.length()));
+            // Mitsuba's texture coordinates: (angle / 2 pi, height).
+            let mesh =
+                open_cylinder().with_corner_uvs(|p| Vec2::new(turn(p.y, p.x), p.z), 0, |_| false);
             (
-                open_cylinder().transformed(&local),
+                mesh.transformed(&local),
                 Shading::Smooth,
                 "cylinder".to_string(),
             )
@@ -174,7 +193,19 @@ fn add_placed<'a>(
             let radius = obj.float("radius")?.unwrap_or(1.0);
             // Mitsuba: to_world * translate(center) * scale(radius).
             let local = Mat4::from_translation(center) * Mat4::from_scale(Vec3::splat(radius));
-            let mesh = shapes::icosphere(shapes::SPHERE_SUBDIVISIONS).transformed(&local);
+            // Mitsuba's texture coordinates: (azimuth / 2 pi, polar angle from +z / pi).
+            let mesh = shapes::icosphere(shapes::SPHERE_SUBDIVISIONS)
+                .with_corner_uvs(
+                    |p| {
+                        Vec2::new(
+                            turn(p.y, p.x),
+                            p.z.clamp(-1.0, 1.0).acos() * std::f32::consts::FRAC_1_PI,
+                        )
+                    },
+                    0,
+                    |p| p.truncate().length() < 1e-6,
+                )
+                .transformed(&local);
             (mesh, Shading::Smooth, "sphere".to_string())
         }
     };
@@ -265,13 +296,18 @@ fn add_placed<'a>(
     obj.finish(&mut ctx.diag)?;
 
     // Mitsuba's default BSDF is diffuse 0.5, but black on a shape that emits.
-    let ParsedBsdf { bsdf, two_sided } = match (bsdf, emission) {
+    let ParsedBsdf {
+        bsdf,
+        two_sided,
+        texture,
+    } = match (bsdf, emission) {
         (Some(b), _) => b,
         (None, Some(_)) => ParsedBsdf {
             bsdf: crate::material::Bsdf::Diffuse {
                 reflectance: Vec3::ZERO,
             },
             two_sided: false,
+            texture: None,
         },
         (None, None) => DEFAULT_BSDF,
     };
@@ -279,6 +315,7 @@ fn add_placed<'a>(
         bsdf,
         two_sided,
         emission,
+        texture,
     });
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));
@@ -301,13 +338,23 @@ fn add_placed<'a>(
 /// Resolves a mesh file name as Mitsuba does: in the main scene file's `<path>` folders, its
 /// folder, then the working directory.
 fn find_mesh(ctx: &Ctx, filename: &str, at: &Location) -> Result<std::path::PathBuf, SceneError> {
+    find_file(ctx, "mesh", filename, at)
+}
+
+/// The file `filename` that a `what` (mesh, image...) names, searched as Mitsuba does.
+pub(crate) fn find_file(
+    ctx: &Ctx,
+    what: &str,
+    filename: &str,
+    at: &Location,
+) -> Result<std::path::PathBuf, SceneError> {
     if let Some(p) = resolve(&ctx.search, Path::new(filename)) {
         if p.is_file() {
             return Ok(p);
         }
     }
     let mut msg = format!(
-        "mesh file '{filename}' not found (searched in {})",
+        "{what} file '{filename}' not found (searched in {})",
         show_list(&ctx.search)
     );
     // A shape written in an included file still resolves against the main file's folders.
@@ -321,6 +368,16 @@ fn find_mesh(ctx: &Ctx, filename: &str, at: &Location) -> Result<std::path::Path
         }
     }
     Err(err(at, ErrorKind::Io, msg))
+}
+
+/// The angle of (x, y) around +z in turns, in [0, 1).
+fn turn(y: f32, x: f32) -> f32 {
+    let t = y.atan2(x) * (0.5 * std::f32::consts::FRAC_1_PI);
+    if t < 0.0 {
+        t + 1.0
+    } else {
+        t
+    }
 }
 
 /// Mitsuba `disk`: the unit disk in z = 0, normal +z.

@@ -1,0 +1,97 @@
+//! Texture lookup: Mitsuba's `checkerboard` and `bitmap` at a surface point's texture
+//! coordinates, from the array `cohort_scenes::texture::gpu_textures` lays out (a header of
+//! five entries, then a bitmap's texels row by row from the top).
+
+use cohort::prelude::*;
+
+/// Header flags (`cohort_scenes::texture`).
+pub const TEXTURE_BITMAP: u32 = 1;
+pub const FILTER_NEAREST: u32 = 1;
+pub const WRAP_MIRROR: u32 = 2;
+pub const WRAP_CLAMP: u32 = 4;
+/// Entries of a texture's header.
+pub const TEXTURE_HEADER: u32 = 5;
+
+/// The texture coordinates of hit `h` (barycentric weights of v1 and v2 in `h.y`, `h.z`) on
+/// triangle `original`, whose three corners' coordinates are in `tex_coords[2 original]` (u0,
+/// v0, u1, v1) and `tex_coords[2 original + 1]` (u2, v2).
+#[kernel_fn]
+pub fn hit_uv(tex_coords: &[Vec4], original: u32, h: Vec4) -> Vec2 {
+    let k = original as usize * 2;
+    let a = tex_coords[k];
+    let b = tex_coords[k + 1];
+    let w0 = 1.0 - h.y - h.z;
+    Vec2::new(
+        a.x * w0 + a.z * h.y + b.x * h.z,
+        a.y * w0 + a.w * h.y + b.y * h.z,
+    )
+}
+
+/// Texel index `i` of a row or column of `n` texels under the wrap mode in `flags`.
+#[kernel_fn]
+pub fn wrap_texel(i: i32, n: i32, flags: u32) -> i32 {
+    let mut r = ((i % n) + n) % n;
+    if flags & WRAP_CLAMP != 0 {
+        r = i.max(0).min(n - 1);
+    } else if flags & WRAP_MIRROR != 0 {
+        let m = 2 * n;
+        let p = ((i % m) + m) % m;
+        r = p;
+        if p >= n {
+            r = m - 1 - p;
+        }
+    }
+    r
+}
+
+/// Texel (x, y) of the bitmap of `w` x `h` texels starting at `base`, wrapped by `flags`.
+#[kernel_fn]
+pub fn texel(textures: &[Vec4], base: u32, w: i32, h: i32, x: i32, y: i32, flags: u32) -> Vec3 {
+    let i = wrap_texel(y, h, flags) * w + wrap_texel(x, w, flags);
+    textures[(base + i as u32) as usize].truncate()
+}
+
+/// The colour of the texture whose header starts at `header` at texture coordinates `uv`,
+/// as `cohort_scenes::Texture::eval` (and Mitsuba) compute it.
+#[kernel_fn]
+pub fn texture_eval(textures: &[Vec4], header: u32, uv: Vec2) -> Vec3 {
+    let h0 = textures[header as usize];
+    let m = textures[(header + 1) as usize];
+    let o = textures[(header + 2) as usize];
+    let p = Vec2::new(m.x * uv.x + m.z * uv.y + o.x, m.y * uv.x + m.w * uv.y + o.y);
+    let flags = h0.w.to_bits();
+    let mut c = textures[(header + 4) as usize].truncate();
+    if h0.x.to_bits() == TEXTURE_BITMAP {
+        let w = h0.y.to_bits() as i32;
+        let h = h0.z.to_bits() as i32;
+        let base = header + TEXTURE_HEADER;
+        if flags & FILTER_NEAREST != 0 {
+            let x = (p.x * w as f32).floor() as i32;
+            let y = (p.y * h as f32).floor() as i32;
+            c = texel(textures, base, w, h, x, y, flags);
+        } else {
+            let x = p.x * w as f32 - 0.5;
+            let y = p.y * h as f32 - 0.5;
+            let x0 = x.floor();
+            let y0 = y.floor();
+            let fx = x - x0;
+            let fy = y - y0;
+            let xi = x0 as i32;
+            let yi = y0 as i32;
+            let top = texel(textures, base, w, h, xi, yi, flags) * (1.0 - fx)
+                + texel(textures, base, w, h, xi + 1, yi, flags) * fx;
+            let bottom = texel(textures, base, w, h, xi, yi + 1, flags) * (1.0 - fx)
+                + texel(textures, base, w, h, xi + 1, yi + 1, flags) * fx;
+            c = top * (1.0 - fy) + bottom * fy;
+        }
+    } else {
+        // Checkerboard: colour0 where the fractional parts of u and v lie on the same side of
+        // one half, else colour1 (already in `c`).
+        let fu = p.x - p.x.floor() > 0.5;
+        let fv = p.y - p.y.floor() > 0.5;
+        if fu == fv {
+            c = textures[(header + 3) as usize].truncate();
+        }
+    }
+    c
+}

@@ -1,0 +1,268 @@
+//! Textures as Mitsuba reads them: `checkerboard` and `bitmap` on a BSDF's colour, and the
+//! texture coordinates of every shape, against what the `mitsuba` package (3.9.1,
+//! scalar_rgb) reports for the same ray (`scene.ray_intersect(ray).uv`).
+
+use cohort_scenes::texture::{Filter, Texture, Wrap};
+use cohort_scenes::{load_mitsuba, load_mitsuba_str, Scene};
+use glam::{Vec2, Vec3};
+
+fn scene(shape: &str) -> Scene {
+    let xml = format!(r#"<scene version="3.0.0"><integrator type="path"/>{shape}</scene>"#);
+    load_mitsuba_str(&xml, ".").unwrap().scene
+}
+
+/// The interpolated texture coordinates where the ray (o, d) first hits `s`.
+fn uv_at(s: &Scene, o: Vec3, d: Vec3) -> Vec2 {
+    let uvs = s.triangles.uvs.as_ref().expect("texture coordinates");
+    let mut best = (f32::INFINITY, Vec2::ZERO);
+    for i in 0..s.triangles.len() {
+        let [a, b, c] = s.triangles.vertices(i);
+        let (e1, e2) = (b - a, c - a);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let t0 = o - a;
+        let u = t0.dot(p) / det;
+        let q = t0.cross(e1);
+        let v = d.dot(q) / det;
+        let t = e2.dot(q) / det;
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < best.0 {
+            let w = &uvs[3 * i..3 * i + 3];
+            best = (t, w[0] * (1.0 - u - v) + w[1] * u + w[2] * v);
+        }
+    }
+    assert!(best.0.is_finite(), "the ray misses");
+    best.1
+}
+
+#[test]
+fn texture_coordinates_of_every_shape_are_mitsubas() {
+    let dir = std::env::temp_dir().join(format!("cohort-uv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.1 0.2\nvt 0.9 0.2\nvt 0.1 0.7\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("tri.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0.1 0.2\n1 0 0 0.9 0.2\n0 1 0 0.1 0.7\n3 0 1 2\n",
+    )
+    .unwrap();
+    let file = |shape: &str| {
+        let xml = format!(r#"<scene version="3.0.0"><integrator type="path"/>{shape}</scene>"#);
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, xml).unwrap();
+        load_mitsuba(&path).unwrap().scene
+    };
+    let z = Vec3::NEG_Z;
+    // (scene, ray origin, direction, Mitsuba's uv, tolerance)
+    let cases: Vec<(Scene, Vec3, Vec3, Vec2, f32)> = vec![
+        (
+            scene(r#"<shape type="rectangle"/>"#),
+            Vec3::new(0.5, 0.25, 1.0),
+            z,
+            Vec2::new(0.75, 0.625),
+            1e-6,
+        ),
+        // An OBJ's v is flipped (flip_tex_coords), a PLY's is not.
+        (
+            file(r#"<shape type="obj"><string name="filename" value="tri.obj"/></shape>"#),
+            Vec3::new(0.25, 0.25, 1.0),
+            z,
+            Vec2::new(0.3, 0.675),
+            1e-6,
+        ),
+        (
+            file(
+                r#"<shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/></shape>"#,
+            ),
+            Vec3::new(0.25, 0.25, 1.0),
+            z,
+            Vec2::new(0.3, 0.325),
+            1e-6,
+        ),
+        (
+            file(r#"<shape type="ply"><string name="filename" value="tri.ply"/></shape>"#),
+            Vec3::new(0.25, 0.25, 1.0),
+            z,
+            Vec2::new(0.3, 0.325),
+            1e-6,
+        ),
+        // Tessellated analytic shapes: close to Mitsuba's exact coordinates.
+        (
+            scene(r#"<shape type="sphere"/>"#),
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::NEG_Y,
+            Vec2::new(0.25, 0.5),
+            2e-3,
+        ),
+        (
+            scene(r#"<shape type="sphere"/>"#),
+            Vec3::new(0.3, 0.1, 2.0),
+            z,
+            Vec2::new(0.051_208_2, 0.102_416),
+            5e-3,
+        ),
+        (
+            scene(r#"<shape type="disk"/>"#),
+            Vec3::new(0.0, 0.5, 1.0),
+            z,
+            Vec2::new(0.5, 0.25),
+            2e-3,
+        ),
+        (
+            scene(r#"<shape type="cylinder"/>"#),
+            Vec3::new(0.0, 2.0, 0.25),
+            Vec3::NEG_Y,
+            Vec2::new(0.25, 0.25),
+            2e-3,
+        ),
+        // Each face of the cube.
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(0.5, 0.25, 2.0),
+            z,
+            Vec2::new(0.625, 0.75),
+            1e-6,
+        ),
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(0.5, 0.25, -2.0),
+            Vec3::Z,
+            Vec2::new(0.375, 0.75),
+            1e-6,
+        ),
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(2.0, 0.5, 0.25),
+            Vec3::NEG_X,
+            Vec2::new(0.75, 0.375),
+            1e-6,
+        ),
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(-2.0, 0.5, 0.25),
+            Vec3::X,
+            Vec2::new(0.75, 0.625),
+            1e-6,
+        ),
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(0.5, 2.0, 0.25),
+            Vec3::NEG_Y,
+            Vec2::new(0.25, 0.375),
+            1e-6,
+        ),
+        (
+            scene(r#"<shape type="cube"/>"#),
+            Vec3::new(0.5, -2.0, 0.25),
+            Vec3::Y,
+            Vec2::new(0.625, 0.75),
+            1e-6,
+        ),
+    ];
+    for (i, (s, o, d, mitsuba, tol)) in cases.iter().enumerate() {
+        let uv = uv_at(s, *o, *d);
+        assert!(
+            (uv - *mitsuba).abs().max_element() <= *tol,
+            "case {i}: {uv} vs Mitsuba's {mitsuba}"
+        );
+    }
+}
+
+#[test]
+fn textures_are_read_as_mitsuba_reads_them() {
+    let s = scene(
+        r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"><rgb name="color0" value="1, 0, 0"/><transform name="to_uv"><scale x="2" y="3"/><translate x="0.5"/></transform></texture></bsdf></shape>"#,
+    );
+    assert_eq!(s.materials[0].texture, Some(0));
+    let Texture::Checkerboard {
+        color0,
+        color1,
+        to_uv,
+    } = &s.textures[0]
+    else {
+        panic!("not a checkerboard")
+    };
+    assert_eq!((*color0, *color1), (Vec3::X, Vec3::splat(0.2)));
+    assert_eq!(to_uv.apply(Vec2::new(1.0, 1.0)), Vec2::new(2.5, 3.0));
+
+    let dir = std::env::temp_dir().join(format!("cohort-tex-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // A 2 x 1 8-bit PNG: sRGB 255 and 128.
+    let mut png_bytes = Vec::new();
+    {
+        let mut e = png::Encoder::new(&mut png_bytes, 2, 1);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(png::BitDepth::Eight);
+        e.write_header()
+            .unwrap()
+            .write_image_data(&[255, 255, 255, 128, 128, 128])
+            .unwrap();
+    }
+    std::fs::write(dir.join("t.png"), &png_bytes).unwrap();
+    let load = |params: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="t.png"/>{params}</texture></bsdf></shape></scene>"#
+        );
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, xml).unwrap();
+        load_mitsuba(&path)
+    };
+    let s = load("").unwrap().scene;
+    let Texture::Bitmap {
+        width,
+        height,
+        texels,
+        filter,
+        wrap,
+        ..
+    } = &s.textures[0]
+    else {
+        panic!("not a bitmap")
+    };
+    assert_eq!(
+        (*width, *height, *filter, *wrap),
+        (2, 1, Filter::Bilinear, Wrap::Repeat)
+    );
+    // sRGB 128 is linear 0.2158605.
+    assert!((texels[1].x - 0.215_860_5).abs() < 1e-5, "{}", texels[1]);
+    let s = load(r#"<boolean name="raw" value="true"/><string name="filter_type" value="nearest"/><string name="wrap_mode" value="mirror"/>"#)
+        .unwrap()
+        .scene;
+    let Texture::Bitmap {
+        texels,
+        filter,
+        wrap,
+        ..
+    } = &s.textures[0]
+    else {
+        panic!("not a bitmap")
+    };
+    assert_eq!((*filter, *wrap), (Filter::Nearest, Wrap::Mirror));
+    assert!((texels[1].x - 128.0 / 255.0).abs() < 1e-6);
+    for (bad, needle) in [
+        (r#"<string name="wrap_mode" value="tile"/>"#, "wrap_mode"),
+        (
+            r#"<string name="filter_type" value="cubic"/>"#,
+            "filter_type",
+        ),
+    ] {
+        let e = load(bad).unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
+    let xml = r#"<scene version="3.0.0"><integrator type="path"/><shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="missing.png"/></texture></bsdf></shape></scene>"#;
+    let path = dir.join("missing.xml");
+    std::fs::write(&path, xml).unwrap();
+    let e = load_mitsuba(&path).unwrap_err().to_string();
+    assert!(e.contains("image file 'missing.png' not found"), "{e}");
+    // Formats other than PNG and OpenEXR are refused at the texture, by name.
+    std::fs::write(dir.join("t.jpg"), b"not really").unwrap();
+    let xml = xml.replace("missing.png", "t.jpg");
+    std::fs::write(&path, xml).unwrap();
+    let e = load_mitsuba(&path).unwrap_err().to_string();
+    assert!(e.contains("'jpg' is not supported"), "{e}");
+}
