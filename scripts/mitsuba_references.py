@@ -433,6 +433,30 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Mitsuba `mask`: a half-transparent sheet under the light (light samples are blocked by
+    # it, paths pass through it), and a checkerboard-cut panel in front of the back wall.
+    "mask": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="rectangle">
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate x="-0.2" y="1.5"/></transform>
+        <bsdf type="mask">
+            <float name="opacity" value="0.4"/>
+            <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.8"/></bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.5" y="0.4"/><rotate y="1" angle="20"/><translate x="0.2" y="0.7" z="-0.4"/></transform>
+        <bsdf type="mask">
+            <texture type="checkerboard" name="opacity">
+                <float name="color0" value="0.9"/><float name="color1" value="0.1"/>
+                <transform name="to_uv"><scale value="3"/></transform>
+            </texture>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.3, 0.1"/></bsdf>
+        </bsdf>
+    </shape>""",
+    ),
     # No ceiling: sunlight falls into the box from above.
     "directional": scene(
         "",

@@ -19,7 +19,7 @@ use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
-use crate::texture::{hit_uv, texture_eval};
+use crate::texture::{hit_uv, luminance, texture_eval};
 use cohort::prelude::*;
 
 /// Bins of the reconstruction filter's table across `[-radius, radius]`
@@ -397,6 +397,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     albedo =
                         texture_eval(textures, m.texture - 1, hit_uv(tex_coords, t.original, h));
                 }
+                // Mitsuba `mask`: the BSDF scatters with probability `opacity`, else the path
+                // passes through (a null interaction: one more vertex, a delta density).
+                let mut opacity = 1.0f32;
+                if m.flags & MASKED != 0 {
+                    opacity = m.opacity;
+                    if m.opacity_texture != 0 {
+                        let c = texture_eval(
+                            textures,
+                            m.opacity_texture - 1,
+                            hit_uv(tex_coords, t.original, h),
+                        );
+                        opacity = luminance(c);
+                    }
+                    opacity = opacity.clamp(0.0, 1.0);
+                }
+                let masked_through = opacity < 1.0 && uniform(key, 9) >= opacity;
                 let diffuse =
                     m.kind == DIFFUSE && (front || two_sided) && albedo.max_element() > 0.0;
                 // Conductors are one-sided, as in Mitsuba: the back absorbs.
@@ -500,12 +516,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     * e.x;
                                 pdf_b = e.y;
                             }
+                            // A mask scatters only its opacity's share, and samples it so.
                             let weight = if delta_select > 0.0 {
                                 1.0 / delta_select
                             } else {
-                                mis_power(light_pdf, pdf_b) / light_pdf
+                                mis_power(light_pdf, pdf_b * opacity) / light_pdf
                             };
-                            ld = thr * fc * le * weight;
+                            ld = thr * fc * le * (weight * opacity);
                             sh_o = o.extend(tmax);
                             sh_d = wi;
                         }
@@ -516,6 +533,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     new_d = d;
                     alive = true;
                     next_bounce = bounce;
+                } else if masked_through {
+                    // Through the mask: same direction and weight; what it reaches next counts
+                    // in full (bsdf_pdf 0, as after a delta bounce).
+                    new_d = d;
+                    alive = true;
                 } else if diffuse {
                     let s = S::sample(n, u, shared_patch, f.patches_n);
                     new_d = s.truncate();
@@ -590,6 +612,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                     alive = true;
                 }
+                // The BSDF densities for MIS are the mask's: its opacity times the nested
+                // BSDF's (1 without a mask).
+                bsdf_pdf *= opacity;
+                env_pdf *= opacity;
                 // Anything else absorbs: a black or back-facing one-sided surface (diffuse,
                 // plastic), whose BSDF is zero there, as in Mitsuba. The path ends here.
                 // A continuing ray starts off the surface on the side it leaves towards

@@ -48,6 +48,8 @@ pub const EMITTER: u32 = 2;
 pub const NONLINEAR: u32 = 4;
 /// `Material::flags`: a rough conductor's microfacets follow Beckmann (else GGX).
 pub const BECKMANN: u32 = 8;
+/// `Material::flags`: Mitsuba `mask` around the BSDF (`Material::opacity`).
+pub const MASKED: u32 = 16;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
@@ -66,6 +68,13 @@ pub struct Material {
     /// Index + 1 of the header of the texture that replaces `color` (diffuse, plastic) in
     /// `extend`'s `textures` (`cohort_kernels::texture`); 0: `color` everywhere.
     pub texture: u32,
+    /// Mitsuba `mask` (`MASKED` flag): the probability that the surface scatters (else the
+    /// path passes through it), where `opacity_texture` is 0.
+    pub opacity: f32,
+    /// Index + 1 of the header of the texture whose luminance is the opacity; 0: `opacity`.
+    pub opacity_texture: u32,
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.

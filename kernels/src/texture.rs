@@ -95,3 +95,9 @@ pub fn texture_eval(textures: &[Vec4], header: u32, uv: Vec2) -> Vec3 {
     }
     c
 }
+
+/// Luminance of a linear sRGB colour (Mitsuba's `luminance`: a texture's `eval_1`).
+#[kernel_fn]
+pub fn luminance(c: Vec3) -> f32 {
+    c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169
+}

@@ -355,3 +355,8 @@ fn textures_replaced_by_their_means_fail() {
         }
     }
 }
+
+#[test]
+fn mask_constant_and_textured_opacity() {
+    check("mask");
+}

@@ -168,6 +168,7 @@ fn white_furnace_with_light_sampling() {
         two_sided: true,
         emission: Some(Vec3::splat(le)),
         texture: None,
+        mask: None,
     });
     b.add_mesh(
         "box",

@@ -55,6 +55,7 @@ fn white_furnace() {
         two_sided: true,
         emission: Some(Vec3::splat(le)),
         texture: None,
+        mask: None,
     });
     b.add_mesh(
         "box",

@@ -40,7 +40,7 @@ pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhEr
 pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use film_filter::{FilmFilter, FilterKind};
-pub use material::{Bsdf, GpuMaterial, Material};
+pub use material::{Bsdf, GpuMaterial, Mask, Material};
 pub use mesh::TriMesh;
 pub use mitsuba::{
     load_mitsuba, load_mitsuba_str, load_mitsuba_str_with, load_mitsuba_with,

@@ -68,6 +68,17 @@ pub struct Material {
     /// Index into [`crate::Scene::textures`] of the texture that gives the BSDF's colour
     /// (diffuse `reflectance`, plastic `diffuse_reflectance`) where it is not a constant.
     pub texture: Option<u32>,
+    /// Mitsuba `mask` around the BSDF: where it is not opaque, paths pass through.
+    pub mask: Option<Mask>,
+}
+
+/// Mitsuba `mask`: the surface scatters with probability `opacity` (the luminance of the
+/// texture `texture` where given), else the path passes through it unchanged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mask {
+    pub opacity: f32,
+    /// Index into [`crate::Scene::textures`].
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -77,6 +88,7 @@ impl Material {
             two_sided: false,
             emission: None,
             texture: None,
+            mask: None,
         }
     }
 
@@ -97,6 +109,7 @@ impl Material {
             two_sided: false,
             emission: None,
             texture: None,
+            mask: None,
         }
     }
 
@@ -113,6 +126,7 @@ impl Material {
             two_sided: false,
             emission: None,
             texture: None,
+            mask: None,
         }
     }
 
@@ -127,6 +141,7 @@ impl Material {
             two_sided: false,
             emission: None,
             texture: None,
+            mask: None,
         }
     }
 
@@ -208,6 +223,9 @@ impl Material {
         if self.emission.is_some() {
             flags |= GpuMaterial::FLAG_EMITTER;
         }
+        if self.mask.is_some() {
+            flags |= GpuMaterial::FLAG_MASKED;
+        }
         GpuMaterial {
             color: color.to_array(),
             kind,
@@ -218,11 +236,15 @@ impl Material {
             conductor_k: conductor_k.to_array(),
             // Set by `Scene::gpu_materials`, which knows where the textures go.
             texture: 0,
+            opacity: self.mask.map_or(1.0, |m| m.opacity),
+            opacity_texture: 0,
+            pad0: 0,
+            pad1: 0,
         }
     }
 }
 
-/// Packed material, 64 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
+/// Packed material, 80 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
 /// 16-byte slot):
 ///
 /// | offset | field | meaning |
@@ -230,11 +252,14 @@ impl Material {
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
 /// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX) |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
 /// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index), else zero |
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
+/// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
+/// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
+/// | 72 | `pad0`, `pad1: u32` | zero |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -246,6 +271,10 @@ pub struct GpuMaterial {
     pub param: f32,
     pub conductor_k: [f32; 3],
     pub texture: u32,
+    pub opacity: f32,
+    pub opacity_texture: u32,
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 impl GpuMaterial {
@@ -258,6 +287,7 @@ impl GpuMaterial {
     pub const FLAG_EMITTER: u32 = 2;
     pub const FLAG_NONLINEAR: u32 = 4;
     pub const FLAG_BECKMANN: u32 = 8;
+    pub const FLAG_MASKED: u32 = 16;
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 80);

@@ -184,6 +184,9 @@ impl Scene {
                 if let Some(t) = m.texture {
                     g.texture = starts[t as usize] + 1;
                 }
+                if let Some(t) = m.mask.and_then(|m| m.texture) {
+                    g.opacity_texture = starts[t as usize] + 1;
+                }
                 g
             })
             .collect()

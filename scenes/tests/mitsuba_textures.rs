@@ -266,3 +266,56 @@ fn textures_are_read_as_mitsuba_reads_them() {
     let e = load_mitsuba(&path).unwrap_err().to_string();
     assert!(e.contains("'jpg' is not supported"), "{e}");
 }
+
+/// Mitsuba `mask`: its opacity as a number, a colour (its luminance) or a texture; a
+/// checkerboard opacity follows Mitsuba's `eval_1`, which takes `color0` where the parities
+/// differ; exactly one nested BSDF.
+#[test]
+fn masks_are_read_as_mitsuba_reads_them() {
+    use cohort_scenes::{Bsdf, Mask};
+    let m = |opacity: &str| {
+        let s = scene(&format!(
+            r#"<shape type="rectangle"><bsdf type="mask">{opacity}<bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf></shape>"#
+        ));
+        (s.materials[0], s.textures)
+    };
+    let (mat, _) = m(r#"<float name="opacity" value="0.3"/>"#);
+    assert_eq!(
+        mat.mask,
+        Some(Mask {
+            opacity: 0.3,
+            texture: None
+        })
+    );
+    assert!(mat.two_sided);
+    assert_eq!(
+        mat.bsdf,
+        Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.5)
+        }
+    );
+    let (mat, _) = m("");
+    assert_eq!(mat.mask.unwrap().opacity, 0.5);
+    let (mat, _) = m(r#"<rgb name="opacity" value="1, 0, 0"/>"#);
+    assert!((mat.mask.unwrap().opacity - 0.212_671).abs() < 1e-6);
+    let (mat, textures) = m(
+        r#"<texture type="checkerboard" name="opacity"><float name="color0" value="0.9"/><float name="color1" value="0.1"/></texture>"#,
+    );
+    let t = &textures[mat.mask.unwrap().texture.unwrap() as usize];
+    // u, v in the same half: color0 for a colour, color1 for an opacity (Mitsuba's eval_1).
+    assert_eq!(t.eval(Vec2::new(0.25, 0.25)), Vec3::splat(0.1));
+    assert_eq!(t.eval(Vec2::new(0.75, 0.25)), Vec3::splat(0.9));
+    for (bad, needle) in [
+        (r#"<bsdf type="mask"/>"#, "nested"),
+        (
+            r#"<bsdf type="mask"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "one nested",
+        ),
+    ] {
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><shape type="rectangle">{bad}</shape></scene>"#
+        );
+        let e = load_mitsuba_str(&xml, ".").unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
+}

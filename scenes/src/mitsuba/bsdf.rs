@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::error::SceneError;
-use crate::material::{Bsdf, Microfacet, PERFECT_CONDUCTOR};
+use crate::material::{Bsdf, Mask, Microfacet, PERFECT_CONDUCTOR};
 
 use super::conductor_iors::CONDUCTOR_IORS;
 use super::diag::syntax;
@@ -21,6 +21,7 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "dielectric",
     "plastic",
     "twosided",
+    "mask",
 ];
 
 /// A BSDF as the shape will use it.
@@ -30,6 +31,8 @@ pub(crate) struct ParsedBsdf {
     pub two_sided: bool,
     /// The texture that gives the BSDF's colour (`Material::texture`).
     pub texture: Option<u32>,
+    /// Mitsuba `mask` around it (`Material::mask`).
+    pub mask: Option<Mask>,
 }
 
 /// Mitsuba's default BSDF for shapes that name none.
@@ -39,6 +42,7 @@ pub(crate) const DEFAULT_BSDF: ParsedBsdf = ParsedBsdf {
     },
     two_sided: false,
     texture: None,
+    mask: None,
 };
 
 /// Mitsuba's named indices of refraction (`src/render/ior.h`).
@@ -237,6 +241,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             b
         }
         "twosided" => return twosided(ctx, obj),
+        "mask" => return mask(ctx, obj),
         _ => return stand_in(ctx, obj),
     };
     obj.finish(&mut ctx.diag)?;
@@ -244,6 +249,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         bsdf,
         two_sided: false,
         texture,
+        mask: None,
     })
 }
 
@@ -330,9 +336,44 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     };
     obj.finish(&mut ctx.diag)?;
     Ok(ParsedBsdf {
-        bsdf: front.bsdf,
         two_sided: true,
-        texture: front.texture,
+        ..front
+    })
+}
+
+/// Mitsuba `mask`: one nested BSDF and its `opacity` (a number, colour or texture, whose
+/// luminance counts; default 0.5).
+fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let mut inner = Vec::new();
+    for c in &obj.children {
+        let t = ctx.target(c)?;
+        if t.tag == "bsdf" {
+            c.take();
+            inner.push(parse_bsdf(ctx, t)?);
+        }
+    }
+    let nested = match inner.as_slice() {
+        [nested] => *nested,
+        [] => {
+            return Err(syntax(
+                &obj.loc,
+                "mask needs a nested <bsdf> (or a <ref> to one)",
+            ))
+        }
+        _ => return Err(syntax(&obj.loc, "mask takes one nested BSDF (as Mitsuba)")),
+    };
+    if nested.mask.is_some() {
+        return Err(syntax(&obj.loc, "a mask inside a mask is not supported"));
+    }
+    let (colour, texture) = ctx
+        .color_or_texture(obj, "opacity")?
+        .unwrap_or((Vec3::splat(0.5), None));
+    let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
+    let opacity = colour.dot(Vec3::new(0.212_671, 0.715_160, 0.072_169));
+    obj.finish(&mut ctx.diag)?;
+    Ok(ParsedBsdf {
+        mask: Some(Mask { opacity, texture }),
+        ..nested
     })
 }
 
@@ -343,7 +384,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
         // Fail on the plugin itself, before anything its parameters could report.
         let instead = match obj.plugin.as_str() {
             "roughdielectric" | "thindielectric" | "null" => "replaced by a smooth dielectric",
-            "mask" | "bumpmap" | "normalmap" | "blendbsdf" => "replaced by its nested BSDF",
+            "bumpmap" | "normalmap" | "blendbsdf" => "replaced by its nested BSDF",
             _ => "replaced by a diffuse BSDF of its colour",
         };
         ctx.diag.unsupported(&obj.loc, &what, instead)?;
@@ -368,15 +409,13 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     };
     let diffuse = |reflectance: Vec3| ParsedBsdf {
         bsdf: Bsdf::Diffuse { reflectance },
-        two_sided: false,
-        texture: None,
+        ..DEFAULT_BSDF
     };
     let (parsed, instead) = match obj.plugin.as_str() {
         "roughdielectric" | "thindielectric" => {
             let b = ParsedBsdf {
                 bsdf: dielectric(ctx, obj)?,
-                two_sided: false,
-                texture: None,
+                ..DEFAULT_BSDF
             };
             (b, "replaced by a smooth dielectric with its IORs".to_string())
         }
@@ -388,13 +427,12 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
                     specular_reflectance: Vec3::ONE,
                     specular_transmittance: Vec3::ONE,
                 },
-                two_sided: false,
-                texture: None,
+                ..DEFAULT_BSDF
             },
             "replaced by an index-matched dielectric (invisible to paths, but it blocks light samples)"
                 .to_string(),
         ),
-        "mask" | "bumpmap" | "normalmap" | "blendbsdf" => match nested(ctx)? {
+        "bumpmap" | "normalmap" | "blendbsdf" => match nested(ctx)? {
             Some(b) => (b, "replaced by its (first) nested BSDF".to_string()),
             None => (DEFAULT_BSDF, "replaced by diffuse 0.5".to_string()),
         },

@@ -300,14 +300,14 @@ fn add_placed<'a>(
         bsdf,
         two_sided,
         texture,
+        mask,
     } = match (bsdf, emission) {
         (Some(b), _) => b,
         (None, Some(_)) => ParsedBsdf {
             bsdf: crate::material::Bsdf::Diffuse {
                 reflectance: Vec3::ZERO,
             },
-            two_sided: false,
-            texture: None,
+            ..DEFAULT_BSDF
         },
         (None, None) => DEFAULT_BSDF,
     };
@@ -316,6 +316,7 @@ fn add_placed<'a>(
         two_sided,
         emission,
         texture,
+        mask,
     });
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));

@@ -89,3 +89,26 @@ fn bitmap<'a>(ctx: &mut Ctx<'a>, t: &'a Obj, to_uv: UvTransform) -> Result<Textu
         to_uv,
     })
 }
+
+/// The index of texture `i` as Mitsuba evaluates it for a number (`eval_1`, e.g. a mask's
+/// opacity): the luminance of the colour lookup, except that its `checkerboard` then takes
+/// `color0` where the parities of u and v differ, the opposite of its colour lookup; such a
+/// checkerboard is added again with its colours exchanged.
+pub(crate) fn scalar_use(ctx: &mut Ctx, i: u32) -> u32 {
+    match &ctx.textures[i as usize] {
+        Texture::Checkerboard {
+            color0,
+            color1,
+            to_uv,
+        } => {
+            let swapped = Texture::Checkerboard {
+                color0: *color1,
+                color1: *color0,
+                to_uv: *to_uv,
+            };
+            ctx.textures.push(swapped);
+            (ctx.textures.len() - 1) as u32
+        }
+        Texture::Bitmap { .. } => i,
+    }
+}
