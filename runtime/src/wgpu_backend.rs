@@ -87,14 +87,24 @@ fn adapter_rank(t: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// The process's one wgpu instance. A new instance per device made the NVIDIA driver report
+/// no adapter after about 17 devices in one process (the Mitsuba render test on an H100);
+/// wgpu expects one instance per process anyway.
+fn instance() -> &'static wgpu::Instance {
+    static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
+    INSTANCE.get_or_init(|| {
+        wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        })
+    })
+}
+
 impl WgpuDevice {
     /// The best adapter, or adapter number `which` in wgpu's order.
     pub(crate) fn new(which: Option<usize>) -> Result<Self> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-            backends: wgpu::Backends::VULKAN,
-            ..wgpu::InstanceDescriptor::new_without_display_handle()
-        });
-        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let mut adapters =
+            pollster::block_on(instance().enumerate_adapters(wgpu::Backends::VULKAN));
         if let Some(index) = which {
             if index >= adapters.len() {
                 return Err(RuntimeError::NoSuchDevice {

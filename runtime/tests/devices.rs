@@ -38,3 +38,20 @@ fn every_device_opens_by_index_and_past_the_end_is_an_error() {
         }
     }
 }
+
+/// A process may open and drop devices again and again (a test suite does, a long sweep may):
+/// the 40th device of each backend opens like the first. (With one wgpu instance per device,
+/// the NVIDIA driver reported no adapter after about 17 wgpu devices in one process.)
+#[test]
+fn devices_open_again_and_again_in_one_process() {
+    for kind in [BackendKind::Vulkan, BackendKind::Wgpu] {
+        if Device::for_tests(kind).is_none() {
+            continue;
+        }
+        for i in 0..40 {
+            let d = Device::new(kind).unwrap_or_else(|e| panic!("{kind:?} device #{i}: {e}"));
+            let b = d.upload(&[i as u32]).unwrap();
+            assert_eq!(d.read(&b).unwrap(), vec![i as u32]);
+        }
+    }
+}
