@@ -276,11 +276,17 @@ pub fn microfacet_eval(wo: Vec3, wi: Vec3, alpha: f32, beckmann: bool) -> Vec4 {
 /// "Optics"). eta 0, k 1 (Mitsuba's `material` = none) gives 1.
 #[kernel_fn]
 pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
-    Vec3::new(
-        fresnel_conductor1(cos_i, eta.x, k.x),
-        fresnel_conductor1(cos_i, eta.y, k.y),
-        fresnel_conductor1(cos_i, eta.z, k.z),
-    )
+    let mut f = Vec3::ONE;
+    // Mitsuba's default `material = none` reflects everything: skip the arithmetic.
+    let perfect = (eta.abs().max_element() == 0.0) & ((k - Vec3::ONE).abs().max_element() == 0.0);
+    if !perfect {
+        f = Vec3::new(
+            fresnel_conductor1(cos_i, eta.x, k.x),
+            fresnel_conductor1(cos_i, eta.y, k.y),
+            fresnel_conductor1(cos_i, eta.z, k.z),
+        );
+    }
+    f
 }
 
 /// [`fresnel_conductor`] of one channel.
