@@ -433,6 +433,28 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Textured conductor reflectance: a checkerboard on a rough conductor sphere, the stripes
+    # bitmap on a smooth gold cube.
+    "conductor_texture": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.25"/>
+            <texture type="checkerboard" name="specular_reflectance">
+                <rgb name="color0" value="0.9, 0.9, 0.9"/><rgb name="color1" value="0.2, 0.5, 0.9"/>
+                <transform name="to_uv"><scale x="6" y="3"/></transform>
+            </texture>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="-30"/><translate x="0.45" y="0.25" z="0.1"/></transform>
+        <bsdf type="conductor"><string name="material" value="Au"/>
+            <texture type="bitmap" name="specular_reflectance"><string name="filename" value="textures/stripes.png"/></texture>
+        </bsdf>
+    </shape>""",
+    ),
     # Mitsuba `mask`: a half-transparent sheet under the light (light samples are blocked by
     # it, paths pass through it), and a checkerboard-cut panel in front of the back wall.
     "mask": scene(

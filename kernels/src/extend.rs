@@ -391,7 +391,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     l += thr * m.emission * w;
                 }
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
-                // The diffuse colour (diffuse, plastic): the material's, or its texture's here.
+                // The material's colour (diffuse, plastic base, conductor reflectance), or its
+                // texture's here.
                 let mut albedo = m.color;
                 if m.texture != 0 {
                     albedo =
@@ -511,7 +512,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     m.param,
                                     m.flags & BECKMANN != 0,
                                 );
-                                fc = m.color
+                                fc = albedo
                                     * fresnel_conductor(e.z, m.transmittance, m.conductor_k)
                                     * e.x;
                                 pdf_b = e.y;
@@ -573,7 +574,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 } else if m.kind == CONDUCTOR && (front || two_sided) {
                     let cos_i = -d.dot(n);
                     new_d = d + n * (2.0 * cos_i);
-                    thr = thr * m.color * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
+                    thr = thr * albedo * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
                     alive = true;
                 } else if glossy {
                     let fr = crate::sampling::frame(n);
@@ -591,7 +592,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if wi.z > 0.0 && e.y > 0.0 {
                         new_d = fr * wi;
                         let fresnel = fresnel_conductor(e.z, m.transmittance, m.conductor_k);
-                        thr = thr * m.color * fresnel * (e.x / e.y);
+                        thr = thr * albedo * fresnel * (e.x / e.y);
                         alive = true;
                         bsdf_pdf = e.y;
                         env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;

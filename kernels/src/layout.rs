@@ -65,7 +65,8 @@ pub struct Material {
     pub param: f32,
     /// Conductor k: the imaginary part of its complex index `transmittance + i k`.
     pub conductor_k: Vec3,
-    /// Index + 1 of the header of the texture that replaces `color` (diffuse, plastic) in
+    /// Index + 1 of the header of the texture that replaces `color` (diffuse, plastic,
+    /// conductors) in
     /// `extend`'s `textures` (`cohort_kernels::texture`); 0: `color` everywhere.
     pub texture: u32,
     /// Mitsuba `mask` (`MASKED` flag): the probability that the surface scatters (else the

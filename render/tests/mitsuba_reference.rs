@@ -360,3 +360,8 @@ fn textures_replaced_by_their_means_fail() {
 fn mask_constant_and_textured_opacity() {
     check("mask");
 }
+
+#[test]
+fn textured_conductor_reflectance() {
+    check("conductor_texture");
+}

@@ -66,7 +66,8 @@ pub struct Material {
     /// Radiance of a Mitsuba `area` emitter: emitted only on the front (face-normal) side.
     pub emission: Option<Vec3>,
     /// Index into [`crate::Scene::textures`] of the texture that gives the BSDF's colour
-    /// (diffuse `reflectance`, plastic `diffuse_reflectance`) where it is not a constant.
+    /// (diffuse `reflectance`, plastic `diffuse_reflectance`, conductor
+    /// `specular_reflectance`) where it is not a constant.
     pub texture: Option<u32>,
     /// Mitsuba `mask` around the BSDF: where it is not opaque, paths pass through.
     pub mask: Option<Mask>,

@@ -353,14 +353,14 @@ fn refs_resolve_for_every_object_kind() {
     assert!(e.message.contains("a -> b -> a"), "{e}");
 }
 
-/// Textures vary a diffuse reflectance (or a plastic's); elsewhere they are refused at their
+/// Textures vary a diffuse reflectance (a plastic's, a conductor's); elsewhere they are refused at their
 /// line (strict) or replaced by their mean colour (lenient); a missing image is an error.
 #[test]
 fn textures_in_bsdfs_strict_and_lenient() {
     let xml = scene(
         r#"<texture type="checkerboard" id="checks"/>
 <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="checks"/></bsdf></shape>
-<shape type="rectangle"><bsdf type="conductor"><ref name="specular_reflectance" id="checks"/></bsdf></shape>"#,
+<shape type="rectangle"><bsdf type="plastic"><ref name="specular_reflectance" id="checks"/></bsdf></shape>"#,
     );
     let e = load_mitsuba_str(&xml, ".").unwrap_err();
     assert_eq!(e.kind, ErrorKind::Unsupported);
@@ -373,16 +373,16 @@ fn textures_in_bsdfs_strict_and_lenient() {
     let l = load_mitsuba_str_with(&xml, ".", &lenient()).unwrap();
     let s = &l.scene;
     let m = |i: usize| &s.materials[s.objects[i].material as usize];
-    // The diffuse one reads the texture; the conductor its mean (Mitsuba's checkerboard
-    // defaults are 0.4 and 0.2).
+    // The diffuse one reads the texture; the plastic's coating its mean (Mitsuba's
+    // checkerboard defaults are 0.4 and 0.2).
     assert_eq!(m(0).texture, Some(0));
     assert_eq!(s.textures.len(), 1);
-    let cohort_scenes::Bsdf::Conductor {
+    let cohort_scenes::Bsdf::Plastic {
         specular_reflectance,
         ..
     } = m(1).bsdf
     else {
-        panic!("not a conductor")
+        panic!("not a plastic")
     };
     assert_eq!(
         (specular_reflectance, m(1).texture),

@@ -189,9 +189,6 @@ pub(crate) fn parse_bsdf<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBs
 }
 
 fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
-    let color = |ctx: &mut Ctx<'a>, name: &str, default: f32| -> Result<Vec3, SceneError> {
-        Ok(ctx.color(obj, name)?.unwrap_or(Vec3::splat(default)))
-    };
     let mut texture = None;
     let bsdf = match obj.plugin.as_str() {
         "diffuse" => {
@@ -203,8 +200,12 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         }
         "conductor" => {
             let (eta, k) = conductor_ior(ctx, obj)?;
+            let (specular_reflectance, t) = ctx
+                .color_or_texture(obj, "specular_reflectance")?
+                .unwrap_or((Vec3::ONE, None));
+            texture = t;
             Bsdf::Conductor {
-                specular_reflectance: color(ctx, "specular_reflectance", 1.0)?,
+                specular_reflectance,
                 eta,
                 k,
             }
@@ -213,7 +214,10 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             let (eta, k) = conductor_ior(ctx, obj)?;
             let distribution = distribution(obj)?;
             let alpha = alpha(ctx, obj)?;
-            let specular_reflectance = color(ctx, "specular_reflectance", 1.0)?;
+            let (specular_reflectance, t) = ctx
+                .color_or_texture(obj, "specular_reflectance")?
+                .unwrap_or((Vec3::ONE, None));
+            texture = t;
             if alpha == 0.0 {
                 ctx.diag.warn(
                     obj.loc_of("alpha"),

@@ -224,7 +224,7 @@ impl<'a> Ctx<'a> {
                 let mean = self.textures[i as usize].mean();
                 self.diag.unsupported(
                     &t.loc,
-                    format!("a '{plugin}' texture here (textures vary only diffuse reflectance and plastic diffuse_reflectance)"),
+                    format!("a '{plugin}' texture here (textures vary only diffuse reflectance, plastic diffuse_reflectance and conductor specular_reflectance)"),
                     format!("replaced by its mean colour {mean}"),
                 )?;
                 return Ok(mean);
