@@ -393,10 +393,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
                 // The material's colour (diffuse, plastic base, conductor reflectance), or its
                 // texture's here.
+                let mut uv = Vec2::ZERO;
+                if m.texture != 0 || m.opacity_texture != 0 {
+                    uv = hit_uv(tex_coords, t.original, h);
+                }
                 let mut albedo = m.color;
                 if m.texture != 0 {
-                    albedo =
-                        texture_eval(textures, m.texture - 1, hit_uv(tex_coords, t.original, h));
+                    albedo = texture_eval(textures, m.texture - 1, uv);
                 }
                 // Mitsuba `mask`: the BSDF scatters with probability `opacity`, else the path
                 // passes through (a null interaction: one more vertex, a delta density).
@@ -404,12 +407,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 if m.flags & MASKED != 0 {
                     opacity = m.opacity;
                     if m.opacity_texture != 0 {
-                        let c = texture_eval(
-                            textures,
-                            m.opacity_texture - 1,
-                            hit_uv(tex_coords, t.original, h),
-                        );
-                        opacity = luminance(c);
+                        opacity = luminance(texture_eval(textures, m.opacity_texture - 1, uv));
                     }
                     opacity = opacity.clamp(0.0, 1.0);
                 }

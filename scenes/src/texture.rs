@@ -156,6 +156,12 @@ fn wrap_index(i: i64, n: i64, wrap: Wrap) -> i64 {
     }
 }
 
+/// Luminance of a linear sRGB colour, Mitsuba's coefficients (a texture read as a number,
+/// `eval_1`; `cohort_kernels::texture::luminance` on the device).
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.212_671, 0.715_160, 0.072_169))
+}
+
 /// Where each texture's header starts in [`gpu_textures`].
 pub fn gpu_texture_starts(textures: &[Texture]) -> Vec<u32> {
     let mut at = 0u32;

@@ -301,7 +301,8 @@ fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Bsdf, Option<u32>), S
     Ok((bsdf, texture))
 }
 
-fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+/// The BSDFs nested in (or referenced by) a wrapper such as `twosided` or `mask`.
+fn nested_bsdfs<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Vec<ParsedBsdf>, SceneError> {
     let mut inner = Vec::new();
     for c in &obj.children {
         let t = ctx.target(c)?;
@@ -310,6 +311,11 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
             inner.push(parse_bsdf(ctx, t)?);
         }
     }
+    Ok(inner)
+}
+
+fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let inner = nested_bsdfs(ctx, obj)?;
     if inner
         .iter()
         .any(|b| matches!(b.bsdf, Bsdf::Dielectric { .. }))
@@ -348,14 +354,7 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
 /// Mitsuba `mask`: one nested BSDF and its `opacity` (a number, colour or texture, whose
 /// luminance counts; default 0.5).
 fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
-    let mut inner = Vec::new();
-    for c in &obj.children {
-        let t = ctx.target(c)?;
-        if t.tag == "bsdf" {
-            c.take();
-            inner.push(parse_bsdf(ctx, t)?);
-        }
-    }
+    let inner = nested_bsdfs(ctx, obj)?;
     let nested = match inner.as_slice() {
         [nested] => *nested,
         [] => {
@@ -373,7 +372,7 @@ fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
         .color_or_texture(obj, "opacity")?
         .unwrap_or((Vec3::splat(0.5), None));
     let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
-    let opacity = colour.dot(Vec3::new(0.212_671, 0.715_160, 0.072_169));
+    let opacity = crate::texture::luminance(colour);
     obj.finish(&mut ctx.diag)?;
     Ok(ParsedBsdf {
         mask: Some(Mask { opacity, texture }),
