@@ -7,9 +7,8 @@ use cohort::runtime::{BackendKind, Device};
 /// The backend `--backend` names, or the one `Device::best` would pick.
 fn backend_kind(backend: Option<&str>) -> Result<BackendKind, String> {
     match backend {
-        Some(b) => {
-            BackendKind::parse(b).ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))
-        }
+        Some(b) => BackendKind::parse(b)
+            .ok_or_else(|| format!("unknown backend `{b}` (wgpu, vulkan or cpu)")),
         None => Ok(Device::best().map_err(|e| e.to_string())?.info().backend),
     }
 }
@@ -46,7 +45,7 @@ pub fn open(backend: Option<&str>, devices: Option<&str>) -> Result<Vec<Device>,
 
 /// `cohort devices`: every usable device of each backend, by index.
 pub fn list() -> Result<(), String> {
-    for kind in [BackendKind::Vulkan, BackendKind::Wgpu] {
+    for kind in [BackendKind::Vulkan, BackendKind::Wgpu, BackendKind::Cpu] {
         match Device::all(kind) {
             Ok(devices) => {
                 for (i, d) in devices.iter().enumerate() {

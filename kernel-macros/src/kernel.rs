@@ -343,6 +343,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     }
     let body = rw.block(&f.block)?;
     crate::host::host_block(&mut f.block);
+    let (cpu_copy, cpu_invoke, cpu_workgroup_vars) = cpu_form(&f, &params);
 
     // Host-computed group values (group = Grid): the closures of `group_share`, in
     // source order, evaluated with the launch's uniform arguments in scope.
@@ -417,6 +418,8 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     Ok(quote! {
         #f
 
+        #cpu_copy
+
         #[allow(non_snake_case, unused_imports, unused_variables, unused_mut, unused_braces, unused_parens, clippy::all)]
         #vis mod #fn_name {
             use super::*;
@@ -445,9 +448,30 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 })
             }
 
-            /// The compiled kernel (WGSL + SPIR-V) for `spec`, cached after the first call.
+            /// Runs one invocation on the CPU backend.
+            #[doc(hidden)]
+            pub fn __cpu_invoke #generics (a: &::cohort::runtime::cpu::LaneArgs<'_>) #where_static {
+                #cpu_invoke
+            }
+
+            /// Size and alignment of each `#[workgroup]` parameter, for the CPU backend.
+            #[doc(hidden)]
+            pub fn __cpu_workgroup_vars #generics () -> ::std::vec::Vec<(usize, usize)> #where_static {
+                #cpu_workgroup_vars
+            }
+
+            /// The compiled kernel (WGSL + SPIR-V + host form) for `spec`, cached after the
+            /// first call.
             pub fn artifact #generics (spec: &::cohort::Spec) -> ::core::result::Result<::std::sync::Arc<::cohort::runtime::KernelArtifact>, ::cohort::emit::CompileError> #where_static {
-                ::cohort::launch::artifact::<__Key #key_params>(&INFO, *spec, |s| build #turbofish (s))
+                ::cohort::launch::artifact::<__Key #key_params>(
+                    &INFO,
+                    *spec,
+                    |s| build #turbofish (s),
+                    ::cohort::emit::HostEntry {
+                        invoke: __cpu_invoke #turbofish,
+                        workgroup_vars: __cpu_workgroup_vars #turbofish,
+                    },
+                )
             }
 
             /// The best specialisation of this kernel for `device` at `group` level
@@ -503,6 +527,89 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             }
         }
     })
+}
+
+/// The CPU backend's form of a kernel: a copy of its host function, next to it, that takes
+/// writable storage and workgroup memory as raw pointers (the invocations of a workgroup
+/// share them across sync points, where no `&mut` parameter may be assumed unaliased) and
+/// rebinds them as the references the body expects; the body of `__cpu_invoke`, which
+/// calls the copy with one invocation's builtins and buffers; and the body of
+/// `__cpu_workgroup_vars`.
+fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStream) {
+    let mut copy = f.clone();
+    let copy_name = format_ident!("__cohort_cpu_{}", f.sig.ident);
+    copy.sig.ident = copy_name.clone();
+    copy.vis = syn::Visibility::Inherited;
+    // The kernel's own `allow`s and `cfg`s apply to the copy too (its lints are the
+    // kernel's, already reported there).
+    copy.attrs
+        .retain(|a| a.path().is_ident("allow") || a.path().is_ident("cfg"));
+    copy.attrs.push(syn::parse_quote!(#[doc(hidden)]));
+    copy.attrs
+        .push(syn::parse_quote!(#[allow(unused, non_snake_case, clippy::all)]));
+    let mut prologue = Vec::new();
+    let mut call_args = Vec::new();
+    let mut vars = Vec::new();
+    let (mut buffer, mut workgroup) = (0usize, 0usize);
+    for (arg, p) in copy.sig.inputs.iter_mut().zip(params) {
+        let FnArg::Typed(pt) = arg else { continue };
+        let name = &p.name;
+        let mutable_ref = matches!(&*pt.ty, Type::Reference(r) if r.mutability.is_some());
+        match &p.kind {
+            ParamKind::Builtin(b) => {
+                if UVEC3_BUILTINS.contains(&b.to_string().as_str()) {
+                    call_args.push(quote!(::cohort::glam::UVec3::from_array(a.b.#b)));
+                } else {
+                    call_args.push(quote!(a.b.#b));
+                }
+            }
+            ParamKind::Storage { elem, .. } => {
+                if mutable_ref {
+                    call_args.push(quote!(a.storage_mut::<#elem>(#buffer)));
+                } else {
+                    call_args.push(quote!(a.storage::<#elem>(#buffer)));
+                }
+                buffer += 1;
+            }
+            ParamKind::Uniform(t) => {
+                call_args.push(quote!(a.uniform::<#t>(#buffer)));
+                buffer += 1;
+            }
+            ParamKind::Workgroup(t) => {
+                call_args.push(quote!(a.workgroup::<#t>(#workgroup)));
+                vars.push(quote!((::core::mem::size_of::<#t>(), ::core::mem::align_of::<#t>())));
+                workgroup += 1;
+            }
+        }
+        if mutable_ref {
+            let Type::Reference(r) = &*pt.ty else {
+                unreachable!()
+            };
+            let elem = &r.elem;
+            let ty = pt.ty.clone();
+            prologue.push(quote! {
+                // SAFETY: the CPU backend passes memory of this type that outlives the call.
+                let #name: #ty = unsafe { &mut *#name };
+            });
+            *pt.ty = syn::parse_quote!(*mut #elem);
+            *pt.pat = syn::parse_quote!(#name);
+        }
+    }
+    let stmts = &copy.block.stmts;
+    copy.block = Box::new(syn::parse_quote!({ #(#prologue)* #(#stmts)* }));
+    let type_params: Vec<_> = f.sig.generics.type_params().map(|t| &t.ident).collect();
+    let turbofish = if type_params.is_empty() {
+        quote!()
+    } else {
+        quote!(::<#(#type_params),*>)
+    };
+    let invoke = quote! {
+        // SAFETY: the CPU backend binds the buffers the launch functions passed, in
+        // parameter order, and workgroup memory laid out by `__cpu_workgroup_vars`.
+        unsafe { super::#copy_name #turbofish (#(#call_args),*) }
+    };
+    let vars = quote!(::std::vec![#(#vars),*]);
+    (copy.into_token_stream(), invoke, vars)
 }
 
 fn collect_group_closures(b: &syn::Block) -> Vec<syn::ExprClosure> {

@@ -125,3 +125,10 @@ fn compaction_wgpu() {
 fn compaction_vulkan() {
     check(BackendKind::Vulkan);
 }
+
+/// The native CPU backend runs the same kernels (subgroup scans, barriers and workgroup
+/// memory included) with its 32-wide subgroups.
+#[test]
+fn compaction_cpu() {
+    check(BackendKind::Cpu);
+}

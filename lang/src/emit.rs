@@ -7,6 +7,8 @@
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 use crate::ir::kernel::BuiltKernel;
+use crate::spec::Group;
+use cohort_runtime::cpu::{GroupLevel, HostKernel};
 use cohort_runtime::{KernelArtifact, KernelFeatures};
 
 /// A kernel that could not be compiled. Type-correct kernel source should never produce
@@ -115,10 +117,40 @@ fn wgsl_entry_point(wgsl: &str) -> Option<String> {
     (!name.is_empty()).then_some(name)
 }
 
-/// Compiles a built kernel into what the runtime dispatches.
+/// Compiles a built kernel into what the runtime dispatches (without a host form: the CPU
+/// backend refuses it; `#[kernel]`'s generated code uses [`compile_with_host`]).
 pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, CompileError> {
+    compile_with_host(built, name, None)
+}
+
+/// The kernel's own Rust function as the generated code hands it to the CPU backend.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct HostEntry {
+    pub invoke: fn(&cohort_runtime::cpu::LaneArgs<'_>),
+    pub workgroup_vars: fn() -> Vec<(usize, usize)>,
+}
+
+/// [`compile`], with the host form the CPU backend runs.
+pub fn compile_with_host(
+    built: &BuiltKernel,
+    name: String,
+    host: Option<HostEntry>,
+) -> Result<KernelArtifact, CompileError> {
     let e = emit(built)?;
+    let host = host.map(|h| HostKernel {
+        invoke: h.invoke,
+        workgroup_vars: h.workgroup_vars,
+        group: match built.spec.group {
+            Group::Thread => GroupLevel::Thread,
+            Group::Warp => GroupLevel::Warp,
+            Group::Block(_) => GroupLevel::Block,
+            Group::Grid => GroupLevel::Grid,
+        },
+        synchronises: synchronises(&e.module),
+    });
     Ok(KernelArtifact {
+        host,
         name,
         entry_point: e.entry_point,
         wgsl: e.wgsl,
@@ -131,6 +163,30 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, Comp
             required_subgroup_size: built.spec.required_subgroup_size,
         },
     })
+}
+
+/// Whether invocations of the kernel wait for each other: a barrier or a subgroup
+/// operation anywhere in the module (group operations above thread level lower to these).
+fn synchronises(module: &naga::Module) -> bool {
+    fn block(b: &naga::Block) -> bool {
+        use naga::Statement as S;
+        b.iter().any(|s| match s {
+            S::ControlBarrier(_)
+            | S::WorkGroupUniformLoad { .. }
+            | S::SubgroupBallot { .. }
+            | S::SubgroupCollectiveOperation { .. }
+            | S::SubgroupGather { .. } => true,
+            S::Block(b) => block(b),
+            S::If { accept, reject, .. } => block(accept) || block(reject),
+            S::Switch { cases, .. } => cases.iter().any(|c| block(&c.body)),
+            S::Loop {
+                body, continuing, ..
+            } => block(body) || block(continuing),
+            _ => false,
+        })
+    }
+    module.functions.iter().any(|(_, f)| block(&f.body))
+        || module.entry_points.iter().any(|e| block(&e.function.body))
 }
 
 /// Bytes of the module's workgroup variables (naga's layout: each variable aligned).

@@ -1,8 +1,12 @@
 //! Running a kernel's plain Rust function on the host, one invocation at a time, for
 //! tests and references. Kernels without barriers or cross-invocation communication
-//! compute the same thing here as on the GPU; subgroups are one lane wide.
+//! compute the same thing here as on the GPU; subgroups are one lane wide. (The CPU
+//! backend, `BackendKind::Cpu`, runs whole kernels, barriers and subgroups included.)
 
 pub mod ops;
+mod subgroup;
+
+pub use subgroup::SubgroupArith;
 
 use std::cell::Cell;
 
@@ -13,9 +17,13 @@ thread_local! {
     static GROUP: Cell<u32> = const { Cell::new(0) };
 }
 
-/// The coherence group of the invocation the host is running (read by `group_share`).
+/// The coherence group of the invocation the host is running (read by `group_share`): the
+/// CPU backend's, or the one `for_each_invocation` set.
 pub fn current_group() -> u32 {
-    GROUP.with(|g| g.get())
+    match cohort_runtime::cpu::lane() {
+        Some(lane) => lane.group,
+        None => GROUP.with(|g| g.get()),
+    }
 }
 
 /// What a kernel's `#[builtin]` parameters would receive.

@@ -2,20 +2,31 @@
 //! operations, atomics helpers and `group_share`.
 //!
 //! Each is a pair, like a user's `#[kernel_fn]`: a host function with the meaning it has
-//! when the kernel runs on the host (one invocation at a time, so a subgroup of one
-//! lane), and a module of the same name whose `ir` function builds the GPU version. The
+//! when the kernel runs on the host, and a module of the same name whose `ir` function
+//! builds the GPU version. On the native CPU backend the host functions wait for the other
+//! invocations of their subgroup or workgroup (`cohort::runtime::cpu::exchange`), so they
+//! mean what they mean on a GPU; a kernel called directly on the host runs alone (a
+//! subgroup of one lane). Each host function is `#[track_caller]`: the CPU backend tells
+//! sync points apart by their call site (`runtime/src/cpu/lanes.rs`). The
 //! front end rewrites a call `f(args)` into `f::ir(args)`, so both are found through the
 //! same `use`.
 
 use glam::UVec4;
 use std::sync::atomic::{AtomicI32, AtomicU32, Ordering};
 
+use crate::host::SubgroupArith;
 use crate::ir::{builder::with, GpuType, Place, Val};
+use cohort_runtime::cpu::{self, GroupLevel, Scope};
 use naga::{
     Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement, SubgroupOperation as So,
 };
 
-pub fn workgroup_barrier() {}
+/// Waits until every invocation of the workgroup has arrived.
+#[doc(alias = "OpControlBarrier")]
+#[track_caller]
+pub fn workgroup_barrier() {
+    cpu::exchange::<(), ()>(Scope::Workgroup, None, |_| ());
+}
 pub mod workgroup_barrier {
     /// Whether a call must be reached by every invocation of its group (checked at the
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
@@ -26,7 +37,11 @@ pub mod workgroup_barrier {
 }
 
 /// Makes storage-buffer writes of the workgroup visible to the workgroup.
-pub fn storage_barrier() {}
+#[doc(alias = "OpControlBarrier")]
+#[track_caller]
+pub fn storage_barrier() {
+    cpu::exchange::<(), ()>(Scope::Workgroup, None, |_| ());
+}
 pub mod storage_barrier {
     /// Whether a call must be reached by every invocation of its group (checked at the
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
@@ -36,7 +51,12 @@ pub mod storage_barrier {
     }
 }
 
-pub fn subgroup_barrier() {}
+/// Waits until every active invocation of the subgroup has arrived.
+#[doc(alias = "OpControlBarrier")]
+#[track_caller]
+pub fn subgroup_barrier() {
+    cpu::exchange::<(), ()>(Scope::Subgroup, None, |_| ());
+}
 pub mod subgroup_barrier {
     /// Whether a call must be reached by every invocation of its group (checked at the
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
@@ -52,8 +72,16 @@ pub mod subgroup_barrier {
 /// Reads workgroup memory after a workgroup barrier and gives every invocation the same
 /// value (WGSL's `workgroupUniformLoad`): its result counts as uniform, so it can steer
 /// loops that contain barriers. It must itself be reached in uniform control flow.
+#[track_caller]
 pub fn workgroup_uniform_load<T: Copy>(p: &T) -> T {
-    *p
+    let p: *const T = p;
+    cpu::exchange::<(), ()>(Scope::Workgroup, None, |_| ());
+    // SAFETY: read after the barrier, as on the GPU; `p` points into workgroup memory that
+    // outlives the call.
+    let v = unsafe { p.read() };
+    // Every invocation reads before any writes again.
+    cpu::exchange::<(), ()>(Scope::Workgroup, None, |_| ());
+    v
 }
 pub mod workgroup_uniform_load {
     /// Whether a call must be reached by every invocation of its group (checked at the
@@ -72,9 +100,23 @@ pub mod workgroup_uniform_load {
     }
 }
 
-/// On the host every invocation runs alone: the group is the one the host runner set.
-pub fn group_share<T>(leader: impl FnOnce(u32) -> T) -> T {
-    leader(crate::host::current_group())
+/// The value the group's first invocation computes with `leader(group index)`, given to
+/// every invocation of the group (its `group` level). Called directly on the host every
+/// invocation runs alone and computes it itself.
+#[track_caller]
+pub fn group_share<T: Copy>(leader: impl FnOnce(u32) -> T) -> T {
+    let Some(lane) = cpu::lane() else {
+        return leader(crate::host::current_group());
+    };
+    let (scope, first) = match lane.level {
+        GroupLevel::Thread | GroupLevel::Grid => return leader(lane.group),
+        GroupLevel::Warp => (Scope::Subgroup, lane.subgroup_lane == 0),
+        GroupLevel::Block => (Scope::Workgroup, lane.local_index == 0),
+    };
+    let mine = first.then(|| leader(lane.group));
+    cpu::exchange(scope, mine, |v| v.get(0))
+        .flatten()
+        .expect("group_share: the group's first invocation returned before reaching the call")
 }
 pub mod group_share {
     /// Whether a call must be reached by every invocation of its group (checked at the
@@ -92,9 +134,15 @@ pub mod group_share {
 /// that ends together when one of its paths ends. Every invocation of the workgroup must
 /// reach the call (as for barriers). Not available at grid level: a dispatch cannot
 /// exchange values between its workgroups (building such a kernel is a compile error).
-/// On the host every invocation runs alone, so the group is that invocation.
+/// Called directly on the host every invocation runs alone, so the group is that invocation.
+#[track_caller]
 pub fn group_any(p: bool) -> bool {
-    p
+    let scope = match cpu::lane().map(|l| l.level) {
+        None | Some(GroupLevel::Thread | GroupLevel::Grid) => return p,
+        Some(GroupLevel::Warp) => Scope::Subgroup,
+        Some(GroupLevel::Block) => Scope::Workgroup,
+    };
+    cpu::exchange(scope, Some(p), |v| v.values().any(|(_, q)| q)).unwrap_or(p)
 }
 pub mod group_any {
     /// Whether a call must be reached by every invocation of its group (checked at the
@@ -134,12 +182,35 @@ fn subgroup_gather<T: GpuType>(mode: GatherMode, x: Val<T>) -> Val<T> {
     })
 }
 
+/// A subgroup collective on the CPU backend: `fold` over the values of the active lanes
+/// that `take(lane, me)` selects, in lane order, from zero. Alone on the host: `alone`.
+#[track_caller]
+fn host_collective<T: SubgroupArith>(
+    x: T,
+    take: fn(u32, u32) -> bool,
+    fold: fn(Option<T>, T) -> T,
+    alone: T,
+) -> T {
+    cpu::exchange(Scope::Subgroup, Some(x), |v| {
+        v.values()
+            .filter(|&(l, _)| take(l, v.me()))
+            .fold(None, |acc, (_, y)| Some(fold(acc, y)))
+            .unwrap_or_default()
+    })
+    .unwrap_or(alone)
+}
+
+fn all_lanes(_: u32, _: u32) -> bool {
+    true
+}
+
 macro_rules! collective {
-    ($name:ident, $op:expr, $co:expr, $host:expr, $doc:literal) => {
+    ($name:ident, $op:expr, $co:expr, $take:expr, $fold:expr, $alone:expr, $doc:literal) => {
         #[doc = $doc]
-        pub fn $name<T: Copy + Default>(x: T) -> T {
+        #[track_caller]
+        pub fn $name<T: SubgroupArith>(x: T) -> T {
             #[allow(clippy::redundant_closure_call)]
-            ($host)(x)
+            host_collective(x, $take, $fold, ($alone)(x))
         }
         pub mod $name {
             #[doc(hidden)]
@@ -156,40 +227,52 @@ collective!(
     subgroup_add,
     So::Add,
     Co::Reduce,
+    all_lanes,
+    |a, y| a.map_or(y, |a| T::add(a, y)),
     |x| x,
-    "Sum over the subgroup."
+    "Sum over the active lanes of the subgroup (in lane order on the CPU backend)."
 );
 collective!(
     subgroup_min,
     So::Min,
     Co::Reduce,
+    all_lanes,
+    |a, y| a.map_or(y, |a| T::min(a, y)),
     |x| x,
-    "Minimum over the subgroup."
+    "Minimum over the active lanes of the subgroup."
 );
 collective!(
     subgroup_max,
     So::Max,
     Co::Reduce,
+    all_lanes,
+    |a, y| a.map_or(y, |a| T::max(a, y)),
     |x| x,
-    "Maximum over the subgroup."
+    "Maximum over the active lanes of the subgroup."
 );
 collective!(
     subgroup_inclusive_add,
     So::Add,
     Co::InclusiveScan,
+    |l, me| l <= me,
+    |a, y| a.map_or(y, |a| T::add(a, y)),
     |x| x,
-    "Sum over lanes up to and including this one."
+    "Sum over the active lanes up to and including this one."
 );
 collective!(
     subgroup_exclusive_add,
     So::Add,
     Co::ExclusiveScan,
+    |l, me| l < me,
+    |a, y| a.map_or(y, |a| T::add(a, y)),
     |_x| T::default(),
-    "Sum over the lanes before this one."
+    "Sum over the active lanes before this one (zero in the first)."
 );
 
+/// Whether `p` holds in any active lane of the subgroup.
+#[track_caller]
 pub fn subgroup_any(p: bool) -> bool {
-    p
+    cpu::exchange(Scope::Subgroup, Some(p), |v| v.values().any(|(_, q)| q)).unwrap_or(p)
 }
 pub mod subgroup_any {
     #[doc(hidden)]
@@ -198,8 +281,10 @@ pub mod subgroup_any {
         super::subgroup_op(super::So::Any, super::Co::Reduce, p)
     }
 }
+/// Whether `p` holds in every active lane of the subgroup.
+#[track_caller]
 pub fn subgroup_all(p: bool) -> bool {
-    p
+    cpu::exchange(Scope::Subgroup, Some(p), |v| v.values().all(|(_, q)| q)).unwrap_or(p)
 }
 pub mod subgroup_all {
     #[doc(hidden)]
@@ -209,9 +294,19 @@ pub mod subgroup_all {
     }
 }
 
-/// Bit i of the result is set when lane i's predicate holds.
+/// Bit i of the result is set when lane i is active and its predicate holds.
+#[track_caller]
 pub fn subgroup_ballot(p: bool) -> UVec4 {
-    UVec4::new(p as u32, 0, 0, 0)
+    cpu::exchange(Scope::Subgroup, Some(p), |v| {
+        let mut bits = [0u32; 4];
+        for (l, q) in v.values() {
+            if q && l < 128 {
+                bits[(l / 32) as usize] |= 1 << (l % 32);
+            }
+        }
+        UVec4::from_array(bits)
+    })
+    .unwrap_or(UVec4::new(p as u32, 0, 0, 0))
 }
 pub mod subgroup_ballot {
     #[doc(hidden)]
@@ -229,9 +324,11 @@ pub mod subgroup_ballot {
     }
 }
 
-/// The value of lane `lane` (a constant).
-pub fn subgroup_broadcast<T: Copy>(x: T, _lane: u32) -> T {
-    x
+/// The value of lane `lane` (a constant). An inactive lane's value is undefined on a
+/// GPU; the CPU backend returns the caller's own.
+#[track_caller]
+pub fn subgroup_broadcast<T: Copy>(x: T, lane: u32) -> T {
+    cpu::exchange(Scope::Subgroup, Some(x), |v| v.get(lane).unwrap_or(x)).unwrap_or(x)
 }
 pub mod subgroup_broadcast {
     #[doc(hidden)]
@@ -241,8 +338,12 @@ pub mod subgroup_broadcast {
     }
 }
 /// The value of the first active lane.
+#[track_caller]
 pub fn subgroup_broadcast_first<T: Copy>(x: T) -> T {
-    x
+    cpu::exchange(Scope::Subgroup, Some(x), |v| {
+        v.values().next().map_or(x, |(_, y)| y)
+    })
+    .unwrap_or(x)
 }
 pub mod subgroup_broadcast_first {
     #[doc(hidden)]
@@ -251,9 +352,11 @@ pub mod subgroup_broadcast_first {
         super::subgroup_gather(super::GatherMode::BroadcastFirst, x)
     }
 }
-/// The value of lane `lane` (any value, computed per lane).
-pub fn subgroup_shuffle<T: Copy>(x: T, _lane: u32) -> T {
-    x
+/// The value of lane `lane` (any value, computed per lane). An inactive or missing lane's
+/// value is undefined on a GPU; the CPU backend returns the caller's own.
+#[track_caller]
+pub fn subgroup_shuffle<T: Copy>(x: T, lane: u32) -> T {
+    cpu::exchange(Scope::Subgroup, Some(x), |v| v.get(lane).unwrap_or(x)).unwrap_or(x)
 }
 pub mod subgroup_shuffle {
     #[doc(hidden)]

@@ -5,7 +5,7 @@ use std::any::TypeId;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use crate::emit::CompileError;
+use crate::emit::{CompileError, HostEntry};
 use crate::ir::kernel::BuiltKernel;
 use crate::spec::{KernelInfo, Spec};
 use cohort_runtime::{Dispatch, GpuBuffer, KernelArtifact, RuntimeError};
@@ -27,11 +27,12 @@ fn cache() -> &'static Mutex<HashMap<CacheKey, Arc<KernelArtifact>>> {
 }
 
 /// The compiled artifact of kernel `K` (a key type unique to the kernel and its generic
-/// arguments) for `spec`, built and emitted on first use.
+/// arguments) for `spec`, built and emitted on first use, with the kernel's host form.
 pub fn artifact<K: 'static>(
     info: &'static KernelInfo,
     spec: Spec,
     build: impl FnOnce(&Spec) -> BuiltKernel,
+    host: HostEntry,
 ) -> std::result::Result<Arc<KernelArtifact>, CompileError> {
     let key = (TypeId::of::<K>(), spec);
     if let Some(a) = cache().lock().unwrap().get(&key) {
@@ -39,7 +40,7 @@ pub fn artifact<K: 'static>(
     }
     let built = build(&spec);
     let name = format!("{}__{}{}", info.name, spec.suffix(), generic_suffix::<K>());
-    let art = Arc::new(crate::emit::compile(&built, name)?);
+    let art = Arc::new(crate::emit::compile_with_host(&built, name, Some(host))?);
     cache().lock().unwrap().insert(key, art.clone());
     Ok(art)
 }

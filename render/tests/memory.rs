@@ -47,7 +47,7 @@ fn render_once(device: &Device, scene: &cohort_scenes::Scene) {
 #[test]
 fn renderers_created_in_a_loop_run_in_flat_memory() {
     let scene = cohort_scenes::embedded::load("cornell").expect("embedded cornell box");
-    for kind in [BackendKind::Wgpu, BackendKind::Vulkan] {
+    for kind in [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu] {
         let Some(device) = Device::for_tests(kind) else {
             continue;
         };

@@ -158,7 +158,7 @@ fn verdicts(name: &str, change: impl Fn(&mut Scene)) -> Vec<(BackendKind, Verdic
     assert_eq!((scene.camera.width, scene.camera.height), (w, h));
     let spp = (sample_budget() / (w * h)).max(1);
     let mut out = Vec::new();
-    for kind in [BackendKind::Wgpu, BackendKind::Vulkan] {
+    for kind in [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu] {
         let Some(device) = Device::for_tests(kind) else {
             continue;
         };

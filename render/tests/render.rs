@@ -105,7 +105,7 @@ fn shared(name: &str) -> Scene {
         .scene
 }
 
-/// The two backends run the same kernels on the same inputs and produce identical
+/// The two GPU backends run the same kernels on the same inputs and produce identical
 /// images, bit for bit (wgpu compiles the WGSL, ash runs the SPIR-V; naga writes both
 /// from one module).
 #[test]
@@ -129,6 +129,36 @@ fn backends_agree() {
             imgs[0].pixels.len()
         );
     }
+}
+
+/// The CPU backend runs the kernels' Rust functions, whose float operations the GPU
+/// compilers may contract or reorder, so its image is not bit-identical: it must agree
+/// statistically. Same seed, so the paths are the same up to rounding: the images are
+/// compared by their means (within 0.5 %) and by the RMS of their difference against the
+/// noise of two renders with different seeds.
+#[test]
+fn cpu_backend_agrees_with_the_gpu_backends() {
+    let scene = cohort_scenes::embedded::load("cornell").unwrap();
+    let Some(cpu) = Device::for_tests(BackendKind::Cpu) else {
+        return;
+    };
+    let Some(gpu) = devices().into_iter().next() else {
+        return;
+    };
+    let on_cpu = render(&cpu, &scene, 32, 8, 7);
+    let on_gpu = render(&gpu, &scene, 32, 8, 7);
+    let other_seed = render(&gpu, &scene, 32, 8, 8);
+    let (mc, mg) = (on_cpu.mean(), on_gpu.mean());
+    assert!(
+        (mc - mg).abs().max_element() <= 0.005 * mg.max_element(),
+        "means differ: CPU {mc} vs GPU {mg}"
+    );
+    let same_paths = on_cpu.rms_diff(&on_gpu);
+    let noise = other_seed.rms_diff(&on_gpu);
+    assert!(
+        same_paths < 0.5 * noise,
+        "CPU vs GPU with the same seed: rms {same_paths}, more than half the noise between seeds ({noise})"
+    );
 }
 
 /// RMS error against a long render falls like 1/sqrt(paths).

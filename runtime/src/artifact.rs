@@ -1,6 +1,7 @@
 //! What a compiled kernel hands to a backend: shader code for each backend plus the
 //! binding layout. Produced by the `cohort` language crate (front end → naga IR → emit),
-//! consumed by `Device::dispatch`. Backends never see naga IR or syn types, only this.
+//! consumed by `Device::dispatch`. Backends never see naga IR or syn types, only this (the
+//! CPU backend runs `host`, the kernel's Rust function compiled with the program).
 
 /// How a kernel parameter is bound. Every binding lives in bind group / descriptor set 0,
 /// at the binding index given by `Binding::binding`.
@@ -46,4 +47,7 @@ pub struct KernelArtifact {
     pub workgroup_size: [u32; 3],
     pub bindings: Vec<Binding>,
     pub features: KernelFeatures,
+    /// The kernel's own Rust function for the native CPU backend (`None` for kernels
+    /// given only as WGSL / SPIR-V, which the CPU backend refuses).
+    pub host: Option<crate::cpu::HostKernel>,
 }

@@ -9,7 +9,7 @@
 use std::marker::PhantomData;
 use std::sync::Arc;
 
-use crate::{vulkan_backend, wgpu_backend};
+use crate::{cpu_backend, vulkan_backend, wgpu_backend};
 
 /// The smallest allocation: zero-length buffers still need a real handle to bind, and 16 is
 /// the uniform-buffer granule, so every allocation can be bound as either kind.
@@ -45,6 +45,7 @@ pub(crate) fn uniform_binding_size(bytes: u64) -> u64 {
 pub(crate) enum RawBuffer {
     Wgpu(wgpu_backend::Buffer),
     Vulkan(Arc<vulkan_backend::Buffer>),
+    Cpu(Arc<cpu_backend::CpuBuffer>),
 }
 
 impl RawBuffer {
@@ -56,6 +57,7 @@ impl RawBuffer {
                 a.device_id == b.device_id && a.buffer == b.buffer
             }
             (RawBuffer::Vulkan(a), RawBuffer::Vulkan(b)) => Arc::ptr_eq(a, b),
+            (RawBuffer::Cpu(a), RawBuffer::Cpu(b)) => Arc::ptr_eq(a, b),
             _ => false,
         }
     }

@@ -10,8 +10,8 @@ use std::sync::Arc;
 
 use crate::buffer::{alloc_size, storage_binding_size, uniform_binding_size};
 use crate::{
-    vulkan_backend, wgpu_backend, BackendKind, BindingKind, BufferArg, GpuBuffer, KernelArtifact,
-    Result, RuntimeError,
+    cpu_backend, vulkan_backend, wgpu_backend, BackendKind, BindingKind, BufferArg, GpuBuffer,
+    KernelArtifact, Result, RuntimeError,
 };
 
 /// What a device offers, as kernels and their launchers need to know it.
@@ -20,6 +20,9 @@ pub struct DeviceInfo {
     pub backend: BackendKind,
     pub adapter_name: String,
     pub driver: String,
+    /// Whether the adapter is a GPU API implemented in software on the CPU (Mesa's
+    /// llvmpipe / lavapipe), which `Device::best` passes over for the CPU backend.
+    pub software_driver: bool,
     pub subgroup_size_min: u32,
     pub subgroup_size_max: u32,
     /// The subgroup size a compute pipeline gets when the kernel does not require one.
@@ -95,6 +98,7 @@ pub struct DispatchStats {
 enum Inner {
     Wgpu(Arc<wgpu_backend::WgpuDevice>),
     Vulkan(Arc<vulkan_backend::VkDevice>),
+    Cpu(Arc<cpu_backend::CpuDevice>),
 }
 
 /// A GPU device on one backend. Cloning is cheap and shares the device.
@@ -149,12 +153,28 @@ impl Device {
         let inner = match kind {
             BackendKind::Wgpu => Inner::Wgpu(Arc::new(wgpu_backend::WgpuDevice::new(which)?)),
             BackendKind::Vulkan => Inner::Vulkan(Arc::new(vulkan_backend::VkDevice::new(which)?)),
+            BackendKind::Cpu => Inner::Cpu(Arc::new(cpu_backend::CpuDevice::new(which)?)),
         };
         Ok(Device { inner })
     }
 
-    /// Raw Vulkan first (required subgroup sizes, no WGSL limits), then wgpu.
+    /// A real GPU if there is one: raw Vulkan first (required subgroup sizes, no WGSL
+    /// limits), then wgpu. Without one, the CPU backend: on the same cores it renders
+    /// faster than the software Vulkan driver (BENCHMARKS.md, "CPU backend").
     pub fn best() -> Result<Device> {
+        let gpu = Device::new(BackendKind::Vulkan)
+            .or_else(|_| Device::new(BackendKind::Wgpu))
+            .ok()
+            .filter(|d| !d.info().software_driver);
+        match gpu {
+            Some(d) => Ok(d),
+            None => Device::new(BackendKind::Cpu),
+        }
+    }
+
+    /// [`best`](Self::best) among the GPU backends only (the software driver included):
+    /// for what only a GPU API can do, such as comparing the WGSL and SPIR-V paths.
+    pub fn best_gpu() -> Result<Device> {
         Device::new(BackendKind::Vulkan).or_else(|vk_err| {
             Device::new(BackendKind::Wgpu).map_err(|wgpu_err| match (vk_err, wgpu_err) {
                 (
@@ -194,6 +214,7 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => &d.info,
             Inner::Vulkan(d) => &d.info,
+            Inner::Cpu(d) => &d.info,
         }
     }
 
@@ -203,6 +224,7 @@ impl Device {
         let raw = match &self.inner {
             Inner::Wgpu(d) => d.create_buffer(bytes, &[])?,
             Inner::Vulkan(d) => d.create_buffer(bytes, &[])?,
+            Inner::Cpu(d) => d.create_buffer(bytes, &[])?,
         };
         Ok(GpuBuffer::new(raw, len))
     }
@@ -213,6 +235,7 @@ impl Device {
         let raw = match &self.inner {
             Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
             Inner::Vulkan(d) => d.create_buffer(bytes, init)?,
+            Inner::Cpu(d) => d.create_buffer(bytes, init)?,
         };
         Ok(GpuBuffer::new(raw, data.len()))
     }
@@ -226,6 +249,7 @@ impl Device {
         let raw = match &self.inner {
             Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
             Inner::Vulkan(d) => d.create_host_buffer(bytes, init)?,
+            Inner::Cpu(d) => d.create_buffer(bytes, init)?,
         };
         Ok(GpuBuffer::new(raw, 1))
     }
@@ -255,6 +279,7 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => d.write(&buf.raw, offset, bytes),
             Inner::Vulkan(d) => d.write(&buf.raw, offset, bytes),
+            Inner::Cpu(d) => d.write(&buf.raw, offset, bytes),
         }
     }
 
@@ -265,6 +290,7 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => d.read(&buf.raw, dst)?,
             Inner::Vulkan(d) => d.read(&buf.raw, dst)?,
+            Inner::Cpu(d) => d.read(&buf.raw, dst)?,
         }
         Ok(out)
     }
@@ -287,6 +313,7 @@ impl Device {
         let pending = match &self.inner {
             Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new(), Vec::new()),
             Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new(), Vec::new()),
+            Inner::Cpu(d) => Pending::Cpu(d, Vec::new(), Vec::new()),
         };
         Batch {
             pending,
@@ -300,6 +327,7 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => d.take_messages(),
             Inner::Vulkan(d) => d.take_messages(),
+            Inner::Cpu(_) => Vec::new(),
         }
     }
 
@@ -309,6 +337,8 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => d.prepare(kernel),
             Inner::Vulkan(d) => d.prepare(kernel),
+            // Nothing to compile: the host function is part of the program.
+            Inner::Cpu(_) => Ok(()),
         }
     }
 
@@ -317,6 +347,7 @@ impl Device {
         match &self.inner {
             Inner::Wgpu(d) => d.pipelines.len(),
             Inner::Vulkan(d) => d.pipelines.len(),
+            Inner::Cpu(_) => 0,
         }
     }
 }
@@ -335,6 +366,11 @@ enum Pending<'d> {
         &'d vulkan_backend::VkDevice,
         Vec<vulkan_backend::Cmd>,
         Vec<(Arc<vulkan_backend::Buffer>, u64)>,
+    ),
+    Cpu(
+        &'d cpu_backend::CpuDevice,
+        Vec<cpu_backend::Cmd>,
+        Vec<(Arc<cpu_backend::CpuBuffer>, u64)>,
     ),
 }
 
@@ -375,6 +411,8 @@ impl Completed {
 enum InFlight<'d> {
     Wgpu(&'d wgpu_backend::WgpuDevice, wgpu_backend::WgpuInFlight),
     Vulkan(vulkan_backend::VkInFlight),
+    /// The CPU backend runs a batch when it is submitted.
+    Done(Vec<DispatchStats>, Vec<Vec<u8>>),
 }
 
 /// A batch on the GPU. The host goes on (e.g. records the next batch) until it calls
@@ -390,6 +428,7 @@ impl Submission<'_> {
         let (stats, reads) = match self.inner {
             InFlight::Wgpu(d, f) => d.wait_for(f)?,
             InFlight::Vulkan(f) => f.wait()?,
+            InFlight::Done(stats, reads) => (stats, reads),
         };
         Ok(Completed { stats, reads })
     }
@@ -416,6 +455,10 @@ impl<'d> Batch<'d> {
                 check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
                 cmds.push(d.record(kernel, args, &dispatch)?);
             }
+            Pending::Cpu(d, cmds, _) => {
+                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
+                cmds.push(d.record(kernel, args, &dispatch)?);
+            }
         }
         Ok(())
     }
@@ -434,6 +477,10 @@ impl<'d> Batch<'d> {
                 reads.push((d.own_buffer(&buf.raw)?, bytes));
                 reads.len() - 1
             }
+            Pending::Cpu(d, _, reads) => {
+                reads.push((d.own_buffer(&buf.raw)?, bytes));
+                reads.len() - 1
+            }
         };
         Ok(ReadBack {
             index,
@@ -447,6 +494,7 @@ impl<'d> Batch<'d> {
         match &self.pending {
             Pending::Wgpu(_, cmds, _) => cmds.len(),
             Pending::Vulkan(_, cmds, _) => cmds.len(),
+            Pending::Cpu(_, cmds, _) => cmds.len(),
         }
     }
 
@@ -464,6 +512,10 @@ impl<'d> Batch<'d> {
         let inner = match self.pending {
             Pending::Wgpu(d, cmds, reads) => InFlight::Wgpu(d, d.submit_async(cmds, reads)?),
             Pending::Vulkan(d, cmds, reads) => InFlight::Vulkan(d.submit_async(cmds, reads)?),
+            Pending::Cpu(d, cmds, reads) => {
+                let (stats, reads) = d.submit(cmds, reads)?;
+                InFlight::Done(stats, reads)
+            }
         };
         Ok(Submission { inner })
     }

@@ -1,19 +1,22 @@
 //! `cohort-runtime`: runs compiled Cohort kernels on a GPU.
 //!
 //! Data flow: the `cohort` language crate compiles a kernel into a [`KernelArtifact`]
-//! (WGSL + SPIR-V + binding layout). A [`Device`] (one of two backends: wgpu consuming the
-//! WGSL, or raw Vulkan through `ash` consuming the SPIR-V) owns [`GpuBuffer`]s and turns
+//! (WGSL + SPIR-V + binding layout + the host function). A [`Device`] (one of three
+//! backends: wgpu consuming the WGSL, raw Vulkan through `ash` consuming the SPIR-V, or the
+//! native CPU backend running the host function on every core) owns [`GpuBuffer`]s and turns
 //! `dispatch(kernel, args, groups)` into a cached pipeline, a bind group / descriptor set
 //! and one queue submission, optionally timed with GPU timestamps ([`DispatchStats`]).
 //!
 //! Module map: `artifact` (what the compiler hands over), `device` (the public facade,
 //! argument checks, batches), `buffer` (typed buffers and size rules), `wgpu_backend`,
 //! `vulkan_init` (opening a raw Vulkan device) and `vulkan_backend` (buffers, pipelines,
-//! submission on it), `pipeline_cache` (compile once per device),
+//! submission on it), `cpu_backend` and `cpu` (the CPU backend and its lanes), `pipeline_cache` (compile once per device),
 //! `timing` (timestamp ticks → nanoseconds), `error`.
 
 pub mod artifact;
 mod buffer;
+pub mod cpu;
+mod cpu_backend;
 mod device;
 mod disk_cache;
 mod error;
@@ -38,6 +41,8 @@ pub enum BackendKind {
     Wgpu,
     /// Raw Vulkan through `ash`, consuming `KernelArtifact::spirv`.
     Vulkan,
+    /// The native CPU backend, running `KernelArtifact::host` on every core.
+    Cpu,
 }
 
 impl BackendKind {
@@ -46,6 +51,7 @@ impl BackendKind {
         match s.trim().to_ascii_lowercase().as_str() {
             "wgpu" => Some(BackendKind::Wgpu),
             "vulkan" | "ash" => Some(BackendKind::Vulkan),
+            "cpu" => Some(BackendKind::Cpu),
             _ => None,
         }
     }
@@ -54,6 +60,7 @@ impl BackendKind {
         match self {
             BackendKind::Wgpu => "wgpu",
             BackendKind::Vulkan => "vulkan",
+            BackendKind::Cpu => "cpu",
         }
     }
 }

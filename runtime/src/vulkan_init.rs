@@ -501,6 +501,7 @@ fn open_device(
         backend: BACKEND,
         adapter_name: name,
         driver: driver_text,
+        software_driver: software,
         subgroup_size_min: sg_min,
         subgroup_size_max: sg_max,
         subgroup_size: subgroup.subgroup_size,

@@ -160,12 +160,19 @@ impl WgpuDevice {
         };
         let timestamps = features.contains(wgpu::Features::TIMESTAMP_QUERY)
             && queue.get_timestamp_period() > 0.0;
+        // The software driver under wgpu, as under the Vulkan backend.
+        let software = adapter_info.device_type == wgpu::DeviceType::Cpu
+            && adapter_info
+                .driver
+                .to_ascii_lowercase()
+                .contains("llvmpipe");
         let info = DeviceInfo {
             backend: BACKEND,
             adapter_name: adapter_info.name.clone(),
             driver: format!("{} {}", adapter_info.driver, adapter_info.driver_info)
                 .trim()
                 .to_string(),
+            software_driver: software,
             subgroup_size_min: sg_min,
             subgroup_size_max: sg_max,
             subgroup_size,
@@ -178,14 +185,7 @@ impl WgpuDevice {
             // defaults apply (lavapipe keeps IEEE behaviour; NVIDIA flushes subnormals).
             f32_subnormals: false,
             f32_nan_inf: false,
-            // The software driver under wgpu, as under the Vulkan backend.
-            uniforms_as_storage: crate::device::uniforms_as_storage(
-                adapter_info.device_type == wgpu::DeviceType::Cpu
-                    && adapter_info
-                        .driver
-                        .to_ascii_lowercase()
-                        .contains("llvmpipe"),
-            ),
+            uniforms_as_storage: crate::device::uniforms_as_storage(software),
         };
         let limits = Limits {
             max_workgroups: [l.max_compute_workgroups_per_dimension; 3],

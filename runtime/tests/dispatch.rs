@@ -468,9 +468,20 @@ fn devices_and_buffers_are_send_and_sync() {
 }
 
 #[test]
-fn best_prefers_vulkan() {
+fn best_prefers_vulkan_then_a_real_gpu_over_the_software_driver() {
     if devices().len() < 2 {
         return;
     }
-    assert_eq!(Device::best().unwrap().info().backend, BackendKind::Vulkan);
+    assert_eq!(
+        Device::best_gpu().unwrap().info().backend,
+        BackendKind::Vulkan
+    );
+    let best = Device::best().unwrap();
+    let vk = Device::new(BackendKind::Vulkan).unwrap();
+    let expected = if vk.info().software_driver {
+        BackendKind::Cpu
+    } else {
+        BackendKind::Vulkan
+    };
+    assert_eq!(best.info().backend, expected, "{:?}", best.info());
 }

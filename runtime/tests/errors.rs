@@ -258,6 +258,7 @@ fn broken_shader_code_is_an_error_not_a_panic() {
         match dev.info().backend {
             BackendKind::Wgpu => kernel.wgsl = "@compute @workgroup_size(64) fn main( {".into(),
             BackendKind::Vulkan => kernel.spirv = vec![],
+            BackendKind::Cpu => unreachable!("these tests run the GPU backends"),
         }
         let buf: GpuBuffer<u32> = dev.alloc(64).unwrap();
         let err = dev
@@ -368,4 +369,27 @@ fn messages_and_names() {
     for kind in [BackendKind::Wgpu, BackendKind::Vulkan] {
         assert_eq!(BackendKind::parse(kind.name()), Some(kind));
     }
+}
+
+/// The CPU backend runs a kernel's Rust function; a kernel given only as shader code has
+/// none, and is refused with an error naming it rather than run wrongly.
+#[test]
+fn the_cpu_backend_refuses_kernels_without_a_host_form() {
+    let dev = Device::new(BackendKind::Cpu).unwrap();
+    let kernel = affine_kernel("shader_only", 2, 1);
+    let buf: GpuBuffer<u32> = dev.alloc(64).unwrap();
+    let err = dev
+        .dispatch(&kernel, &[buf.arg()], Dispatch::Groups([1, 1, 1]))
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RuntimeError::MissingFeature {
+                backend: BackendKind::Cpu,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("shader_only"), "{err}");
 }

@@ -1,7 +1,8 @@
-//! Cross-backend difftests: each kernel runs on wgpu (WGSL) and on raw Vulkan (SPIR-V
-//! through ash) with the same inputs, and the outputs must agree with each other and,
-//! where the kernel has no cross-invocation communication, with the host run of the
-//! same Rust function. Integer results are compared exactly; float results exactly
+//! Cross-backend difftests: each kernel runs on wgpu (WGSL), on raw Vulkan (SPIR-V
+//! through ash) and on the native CPU backend with the same inputs. The GPU backends must
+//! agree with each other and, where the kernel has no cross-invocation communication,
+//! with the host run of the same Rust function; the CPU backend runs that function, so
+//! it must equal the host run exactly. Integer results are compared exactly; float results exactly
 //! between backends unless stated, and within a bound stated at each comparison against
 //! the host (GPU drivers may contract `a*b+c` into an FMA and use their own
 //! transcendentals). The suite passes on lavapipe and on an NVIDIA H200 (BENCHMARKS.md).
@@ -15,8 +16,9 @@ use glam::{UVec2, UVec4, Vec3, Vec4};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 fn run_all<T: PartialEq + std::fmt::Debug>(name: &str, f: impl Fn(&Device) -> T) -> Vec<T> {
-    let outs: Vec<T> = devices().iter().map(&f).collect();
-    for w in outs.windows(2) {
+    let devs = devices();
+    let outs: Vec<T> = devs.iter().map(&f).collect();
+    for w in gpu_outputs(&devs, &outs).windows(2) {
         assert_eq!(w[0], w[1], "{name}: wgpu and Vulkan disagree");
     }
     outs
@@ -498,7 +500,8 @@ fn local_array_stack() {
 fn transcendental_math() {
     use cohort_tests::kernels::mathfns::*;
     let xs: Vec<f32> = (0..512).map(|i| (i as f32 - 256.0) * 0.03125).collect();
-    let outs: Vec<Vec<Vec4>> = devices()
+    let devs = devices();
+    let outs: Vec<Vec<Vec4>> = devs
         .iter()
         .map(|d| {
             let x = d.upload(&xs).unwrap();
@@ -511,11 +514,12 @@ fn transcendental_math() {
     for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| {
         mathfns(inv.global_index, &xs, &mut host)
     });
-    for w in outs.windows(2) {
+    assert_cpu_is_host("mathfns", &devs, &outs, &host);
+    for w in gpu_outputs(&devs, &outs).windows(2) {
         assert_close(
             "mathfns wgpu vs vulkan",
-            &flatten_vec4(&w[0]),
-            &flatten_vec4(&w[1]),
+            &flatten_vec4(w[0]),
+            &flatten_vec4(w[1]),
             4,
             1e-6,
         );
@@ -545,7 +549,8 @@ fn vector_and_matrix_math() {
             )
         })
         .collect();
-    let outs: Vec<Vec<Vec4>> = devices()
+    let devs = devices();
+    let outs: Vec<Vec<Vec4>> = devs
         .iter()
         .map(|d| {
             let i = d.upload(&input).unwrap();
@@ -558,6 +563,7 @@ fn vector_and_matrix_math() {
     for_each_invocation(input.len() as u32, 64, Group::Thread, |inv| {
         vectors(inv.global_index, &input, &mut host)
     });
+    assert_cpu_is_host("vectors", &devs, &outs, &host);
     for o in &outs {
         assert_close(
             "vectors gpu vs host",

@@ -63,6 +63,7 @@ pub fn artifact(
         workgroup_size,
         bindings,
         features,
+        host: None,
     }
 }
 

@@ -4,13 +4,43 @@
 
 use cohort::runtime::{BackendKind, Device};
 
-/// Every backend with an adapter here (both, on lavapipe or a GPU). With `CI=true` a
-/// missing adapter fails the test instead of skipping it.
+/// Every backend with an adapter here (wgpu and Vulkan on lavapipe or a GPU), and the
+/// native CPU backend. With `CI=true` a missing adapter fails the test instead of
+/// skipping it.
 pub fn devices() -> Vec<Device> {
-    [BackendKind::Wgpu, BackendKind::Vulkan]
+    [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu]
         .into_iter()
         .filter_map(Device::for_tests)
         .collect()
+}
+
+/// Whether `d` is the native CPU backend, which runs the kernel's own Rust function: its
+/// results equal the host run's exactly, where the GPUs' are compared within a bound.
+pub fn is_cpu(d: &Device) -> bool {
+    d.info().backend == BackendKind::Cpu
+}
+
+/// The outputs of the GPU backends among `outs` (one per device of `devs`).
+pub fn gpu_outputs<'a, T>(devs: &[Device], outs: &'a [T]) -> Vec<&'a T> {
+    devs.iter()
+        .zip(outs)
+        .filter(|(d, _)| !is_cpu(d))
+        .map(|(_, o)| o)
+        .collect()
+}
+
+/// Asserts that the CPU backend's output among `outs` is exactly `host` (compared by
+/// `Debug` text, so that NaN and -0.0 count as themselves).
+pub fn assert_cpu_is_host<T: std::fmt::Debug>(what: &str, devs: &[Device], outs: &[T], host: &T) {
+    for (d, o) in devs.iter().zip(outs) {
+        if is_cpu(d) {
+            assert_eq!(
+                format!("{o:?}"),
+                format!("{host:?}"),
+                "{what}: the CPU backend differs from the host run of the same function"
+            );
+        }
+    }
 }
 
 /// xorshift32: reproducible inputs without a dependency.

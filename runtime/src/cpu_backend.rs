@@ -1,0 +1,285 @@
+//! The native CPU backend: buffers in host memory, and dispatches that run the kernel's own
+//! Rust function (`KernelArtifact::host`) for every invocation, workgroups spread over all
+//! cores by rayon (`cpu::lanes` runs one workgroup). Submissions run when they are made,
+//! so a `Submission` is already complete; timestamps are wall time.
+
+use std::cell::{RefCell, UnsafeCell};
+use std::panic::AssertUnwindSafe;
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::buffer::RawBuffer;
+use crate::cpu::{self, HostBuf, HostKernel};
+use crate::device::{DeviceInfo, Dispatch, DispatchStats, Limits};
+use crate::{BackendKind, BufferArg, KernelArtifact, Result, RuntimeError};
+
+/// Host memory of one buffer, 16-byte aligned and zero-filled.
+pub(crate) struct CpuBuffer {
+    mem: Box<[UnsafeCell<u128>]>,
+}
+// Dispatches write buffers from several threads at once, as GPU invocations do.
+unsafe impl Send for CpuBuffer {}
+unsafe impl Sync for CpuBuffer {}
+
+impl CpuBuffer {
+    fn new(bytes: u64, init: &[u8]) -> Result<CpuBuffer> {
+        let words = usize::try_from(bytes.div_ceil(16)).map_err(|_| RuntimeError::Allocation {
+            backend: BackendKind::Cpu,
+            bytes,
+            detail: "larger than the address space".into(),
+        })?;
+        let mut v = Vec::new();
+        v.try_reserve_exact(words)
+            .map_err(|e| RuntimeError::Allocation {
+                backend: BackendKind::Cpu,
+                bytes,
+                detail: e.to_string(),
+            })?;
+        v.resize_with(words, || UnsafeCell::new(0));
+        let buf = CpuBuffer {
+            mem: v.into_boxed_slice(),
+        };
+        // SAFETY: fresh allocation of at least `init.len()` bytes.
+        unsafe { std::ptr::copy_nonoverlapping(init.as_ptr(), buf.ptr(), init.len()) };
+        Ok(buf)
+    }
+
+    fn ptr(&self) -> *mut u8 {
+        UnsafeCell::raw_get(self.mem.as_ptr()) as *mut u8
+    }
+
+    fn bytes(&self) -> usize {
+        self.mem.len() * 16
+    }
+}
+
+/// One recorded dispatch.
+pub(crate) struct Cmd {
+    name: String,
+    host: HostKernel,
+    workgroup_size: u32,
+    /// The kept buffers (alive until the dispatch ran) and the bytes each binding covers.
+    args: Vec<(Arc<CpuBuffer>, usize)>,
+    groups: Groups,
+}
+
+enum Groups {
+    Direct([u32; 3]),
+    Indirect(Arc<CpuBuffer>, usize),
+}
+
+pub(crate) struct CpuDevice {
+    pub(crate) info: DeviceInfo,
+    pub(crate) limits: Limits,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<cpu::Scratch> = RefCell::new(cpu::Scratch::new());
+}
+
+impl CpuDevice {
+    pub(crate) fn new(which: Option<usize>) -> Result<CpuDevice> {
+        if let Some(index) = which.filter(|&i| i > 0) {
+            return Err(RuntimeError::NoSuchDevice {
+                backend: BackendKind::Cpu,
+                index,
+                available: vec![cpu_name()],
+            });
+        }
+        Ok(CpuDevice {
+            info: DeviceInfo {
+                backend: BackendKind::Cpu,
+                adapter_name: cpu_name(),
+                driver: format!("cohort native, {} threads", rayon::current_num_threads()),
+                software_driver: false,
+                subgroup_size_min: cpu::SUBGROUP_WIDTH,
+                subgroup_size_max: cpu::SUBGROUP_WIDTH,
+                subgroup_size: cpu::SUBGROUP_WIDTH,
+                supports_required_subgroup_size: true,
+                timestamps: true,
+                max_workgroups_per_dim: 65535,
+                max_storage_buffer_binding_size: u32::MAX as u64,
+                // Rust's f32 arithmetic on x86-64 and AArch64 is IEEE without flushing.
+                f32_subnormals: true,
+                f32_nan_inf: true,
+                uniforms_as_storage: false,
+            },
+            limits: Limits {
+                max_workgroups: [65535; 3],
+                max_workgroup_size: [1024, 1, 1],
+                max_invocations: 1024,
+                max_storage_binding: u32::MAX as u64,
+                max_uniform_binding: 1 << 16,
+                subgroups: true,
+                // The H100's default: a kernel that fits here fits on the GPUs people
+                // move it to (the CPU itself would take far more).
+                max_workgroup_memory: 48 * 1024,
+            },
+        })
+    }
+
+    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        Ok(RawBuffer::Cpu(Arc::new(CpuBuffer::new(bytes, init)?)))
+    }
+
+    fn own(&self, raw: &RawBuffer, op: &'static str) -> Result<Arc<CpuBuffer>> {
+        match raw {
+            RawBuffer::Cpu(b) => Ok(b.clone()),
+            _ => Err(RuntimeError::BufferNotOnDevice { op }),
+        }
+    }
+
+    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let b = self.own(raw, "write")?;
+        assert!(offset as usize + bytes.len() <= b.bytes());
+        // SAFETY: in range (checked by the caller against the logical length); no dispatch
+        // runs while the host writes (submissions complete before they return).
+        unsafe {
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), b.ptr().add(offset as usize), bytes.len())
+        };
+        Ok(())
+    }
+
+    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        let b = self.own(raw, "read")?;
+        self.read_prefix(&b, dst);
+        Ok(())
+    }
+
+    fn read_prefix(&self, b: &CpuBuffer, dst: &mut [u8]) {
+        assert!(dst.len() <= b.bytes());
+        // SAFETY: in range; no dispatch is running.
+        unsafe { std::ptr::copy_nonoverlapping(b.ptr(), dst.as_mut_ptr(), dst.len()) };
+    }
+
+    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<Arc<CpuBuffer>> {
+        self.own(raw, "read_back")
+    }
+
+    pub(crate) fn record(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        let host = kernel.host.ok_or_else(|| RuntimeError::MissingFeature {
+            kernel: kernel.name.clone(),
+            backend: BackendKind::Cpu,
+            feature: "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
+        })?;
+        let args = kernel
+            .bindings
+            .iter()
+            .zip(args)
+            .map(|(b, a)| {
+                let buf = match a.raw {
+                    RawBuffer::Cpu(buf) => buf.clone(),
+                    _ => {
+                        return Err(RuntimeError::ForeignBuffer {
+                            kernel: kernel.name.clone(),
+                            param: b.name.clone(),
+                        })
+                    }
+                };
+                Ok((buf, a.size_bytes as usize))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let groups = match dispatch {
+            Dispatch::Groups(g) => Groups::Direct(*g),
+            Dispatch::Indirect { args, offset_elems } => {
+                Groups::Indirect(self.own(&args.raw, "indirect dispatch")?, *offset_elems)
+            }
+        };
+        Ok(Cmd {
+            name: kernel.name.clone(),
+            host,
+            workgroup_size: kernel.workgroup_size[0],
+            args,
+            groups,
+        })
+    }
+
+    /// Runs the dispatches in order, then copies the read-backs.
+    pub(crate) fn submit(
+        &self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(Arc<CpuBuffer>, u64)>,
+    ) -> Result<(Vec<DispatchStats>, Vec<Vec<u8>>)> {
+        let mut stats = Vec::with_capacity(cmds.len());
+        for cmd in &cmds {
+            let start = Instant::now();
+            run(cmd)?;
+            stats.push(DispatchStats {
+                gpu_time_ns: Some(start.elapsed().as_nanos() as u64),
+            });
+        }
+        let reads = reads
+            .into_iter()
+            .map(|(b, bytes)| {
+                let mut out = vec![0u8; bytes as usize];
+                self.read_prefix(&b, &mut out);
+                out
+            })
+            .collect();
+        Ok((stats, reads))
+    }
+}
+
+fn cpu_name() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("CPU: {model}")
+}
+
+fn run(cmd: &Cmd) -> Result<()> {
+    let groups = match &cmd.groups {
+        Groups::Direct(g) => *g,
+        Groups::Indirect(b, at) => {
+            let mut words = [0u8; 12];
+            let start = at * 4;
+            // SAFETY: `check_call` checked that three words follow `at`.
+            unsafe { std::ptr::copy_nonoverlapping(b.ptr().add(start), words.as_mut_ptr(), 12) };
+            let w = |i: usize| u32::from_le_bytes(words[i * 4..i * 4 + 4].try_into().unwrap());
+            [w(0), w(1), w(2)]
+        }
+    };
+    let total = groups.iter().map(|&g| g as u64).product::<u64>();
+    if total == 0 {
+        return Ok(());
+    }
+    let bufs: Vec<HostBuf> = cmd
+        .args
+        .iter()
+        .map(|(b, bytes)| HostBuf {
+            ptr: b.ptr(),
+            bytes: *bytes,
+        })
+        .collect();
+    let launch = cpu::Launch::new(&cmd.host, &bufs, cmd.workgroup_size, groups);
+    let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
+        (0..total as u32)
+            .into_par_iter()
+            .for_each(|wg| SCRATCH.with(|s| cpu::run_workgroup(&launch, wg, &mut s.borrow_mut())))
+    }));
+    outcome.map_err(|payload| {
+        let message = payload
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "a panic without a message".into());
+        RuntimeError::Dispatch {
+            kernel: cmd.name.clone(),
+            backend: BackendKind::Cpu,
+            detail: format!("an invocation panicked: {message}"),
+        }
+    })
+}

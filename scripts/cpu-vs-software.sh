@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The CPU backend against the software Vulkan driver on the same cores (issue 10): the
+# README's first command on each, alternated $ROUNDS times (default 3), paths/s per run.
+# Usage: scripts/cpu-vs-software.sh [extra render options]; binary: target/release/cohort.
+set -euo pipefail
+BIN="${BIN:-target/release/cohort}"
+ROUNDS="${ROUNDS:-3}"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
+for r in $(seq "$ROUNDS"); do
+  for backend in cpu vulkan; do
+    line=$("$BIN" render --width 256 --height 256 --paths 32 --backend "$backend" \
+      --out "$tmp/$backend.exr" --png "$tmp/$backend.png" "$@" 2>&1 | grep -E '^(paths/s|device)' | tr -s ' ' | paste -sd ';')
+    echo "round $r $backend: $line"
+  done
+done

@@ -1,0 +1,141 @@
+//! What the native CPU backend adds to the difftests' third column: subgroup operations in
+//! divergent control flow mean what they mean on a GPU (only the active lanes take part),
+//! on every backend; a kernel that panics on the CPU (an index out of bounds) comes back
+//! as an error naming the kernel, not as a crash; dispatches are timed.
+
+mod common;
+
+use cohort::prelude::*;
+use cohort::runtime::{BackendKind, Device, RuntimeError};
+
+/// Even lanes sum 1 over the subgroup inside the `if` (only they are active there), every
+/// lane again after it (all reconverged), and odd lanes count the even lanes below them
+/// with an exclusive scan over a ballot-free predicate.
+#[kernel(workgroup = 64)]
+pub fn divergent_subgroups(
+    #[builtin(global_index)] gi: u32,
+    #[builtin(subgroup_lane)] lane: u32,
+    out: &mut [UVec4],
+) {
+    let mut inside = 0u32;
+    let mut scan = 0u32;
+    if lane % 2 == 0 {
+        inside = subgroup_add(1u32);
+    } else {
+        scan = subgroup_exclusive_add(lane);
+    }
+    let after = subgroup_add(1u32);
+    out[gi as usize] = UVec4::new(inside, after, scan, 0);
+}
+
+#[test]
+fn divergent_subgroup_operations_count_only_active_lanes() {
+    for d in common::devices() {
+        let size = d.info().subgroup_size;
+        let out = d.alloc::<UVec4>(128).unwrap();
+        divergent_subgroups::launch(&d, 128u32, &out).unwrap();
+        let got = d.read(&out).unwrap();
+        for (i, v) in got.iter().enumerate() {
+            let lane = i as u32 % size;
+            let (inside, scan) = if lane.is_multiple_of(2) {
+                (size / 2, 0)
+            } else {
+                // Odd lanes below this one: 1, 3, ..., lane - 2.
+                (0, (1..lane).step_by(2).sum::<u32>())
+            };
+            assert_eq!(
+                *v,
+                UVec4::new(inside, size, scan, 0),
+                "{:?}, invocation {i} (lane {lane} of {size})",
+                d.info().backend
+            );
+        }
+    }
+}
+
+#[kernel(workgroup = 64)]
+pub fn reads_past_the_end(#[builtin(global_index)] gi: u32, xs: &[u32], out: &mut [u32]) {
+    out[gi as usize] = xs[gi as usize + 1000];
+}
+
+#[test]
+fn a_panicking_invocation_is_an_error_naming_the_kernel() {
+    let Some(d) = Device::for_tests(BackendKind::Cpu) else {
+        return;
+    };
+    let xs = d.upload(&[1u32; 64]).unwrap();
+    let out = d.alloc::<u32>(64).unwrap();
+    let err = reads_past_the_end::launch(&d, 64u32, &xs, &out).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        matches!(
+            err,
+            cohort::Error::Runtime(RuntimeError::Dispatch {
+                backend: BackendKind::Cpu,
+                ..
+            })
+        ),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("reads_past_the_end") && msg.contains("index out of bounds"),
+        "{msg}"
+    );
+    // The device is still usable.
+    let ok = d.upload(&[5u32; 2000]).unwrap();
+    let stats = reads_past_the_end::launch(&d, 64u32, &ok, &out).unwrap();
+    assert_eq!(d.read(&out).unwrap(), vec![5u32; 64]);
+    assert!(stats.gpu_time_ns.is_some(), "dispatches are timed");
+}
+
+/// A lane that panics between barriers, while the others of its workgroup wait parked on
+/// their own stacks: they are unwound, and the dispatch fails cleanly.
+#[kernel(workgroup = 64)]
+pub fn panics_between_barriers(
+    #[builtin(local_index)] li: u32,
+    #[workgroup] shared: &mut [u32; 64],
+    xs: &[u32],
+    out: &mut [u32],
+) {
+    shared[li as usize] = xs[li as usize];
+    workgroup_barrier();
+    let v = shared[(63 - li) as usize];
+    let w = if li == 5 { xs[v as usize] } else { v };
+    workgroup_barrier();
+    out[li as usize] = w;
+}
+
+#[test]
+fn a_panic_in_a_synchronising_kernel_unwinds_the_parked_lanes() {
+    let Some(d) = Device::for_tests(BackendKind::Cpu) else {
+        return;
+    };
+    let mut xs: Vec<u32> = (0..64).collect();
+    xs[63 - 5] = 1_000_000;
+    let xs = d.upload(&xs).unwrap();
+    let out = d.alloc::<u32>(64).unwrap();
+    let err = panics_between_barriers::launch(&d, 64u32, &xs, &out).unwrap_err();
+    assert!(err.to_string().contains("index out of bounds"), "{err}");
+    let fine = d.upload(&(0..64).collect::<Vec<u32>>()).unwrap();
+    panics_between_barriers::launch(&d, 64u32, &fine, &out).unwrap();
+    assert_eq!(
+        d.read(&out).unwrap(),
+        (0..64u32).map(|i| 63 - i).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn the_cpu_backend_describes_itself() {
+    let Some(d) = Device::for_tests(BackendKind::Cpu) else {
+        return;
+    };
+    let info = d.info();
+    assert_eq!(info.subgroup_size, cohort::runtime::cpu::SUBGROUP_WIDTH);
+    assert!(!info.software_driver);
+    assert!(info.timestamps);
+    assert!(
+        info.adapter_name.starts_with("CPU"),
+        "{}",
+        info.adapter_name
+    );
+}
