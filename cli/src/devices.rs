@@ -13,12 +13,28 @@ fn backend_kind(backend: Option<&str>) -> Result<BackendKind, String> {
     }
 }
 
+/// When `Device::best` chose the CPU backend, says why (on stderr): no GPU, or only the
+/// software Vulkan driver, which is slower on the same cores.
+pub fn say_why_cpu(d: &Device) {
+    if d.info().backend != BackendKind::Cpu {
+        return;
+    }
+    let why = match Device::best_gpu() {
+        Ok(gpu) => format!(
+            "the only Vulkan device is {}, a software driver, slower on the same cores              (--backend vulkan uses it anyway)",
+            gpu.info().adapter_name
+        ),
+        Err(_) => "no Vulkan device found".to_string(),
+    };
+    eprintln!("note: rendering on the CPU backend: {why}");
+}
+
 /// Opens the devices of `--devices` on `--backend`; every index is checked before any
 /// work starts, so a bad one fails at once, naming the devices there are.
 pub fn open(backend: Option<&str>, devices: Option<&str>) -> Result<Vec<Device>, String> {
     let Some(list) = devices else {
         let device = match backend {
-            None => Device::best(),
+            None => Device::best().inspect(say_why_cpu),
             Some(_) => Device::new(backend_kind(backend)?),
         };
         return Ok(vec![device.map_err(|e| e.to_string())?]);

@@ -56,7 +56,8 @@ pub struct FiguresArgs {
     /// Image height (default: the scene's film).
     #[arg(long, allow_negative_numbers = true)]
     height: Option<u32>,
-    /// `wgpu` (WGSL) or `vulkan` (SPIR-V through ash); default: the best found.
+    /// `wgpu` (WGSL), `vulkan` (SPIR-V through ash) or `cpu` (the native CPU backend);
+    /// default: a real GPU if there is one, else `cpu`.
     #[arg(long)]
     backend: Option<String>,
     /// Seed of every point (the reference uses a different seed derived from it).
@@ -234,10 +235,10 @@ impl Row {
 pub fn run(a: FiguresArgs) -> Result<(), String> {
     let plan = parse_plan(&a)?;
     let device = match a.backend.as_deref() {
-        None => Device::best(),
+        None => Device::best().inspect(crate::devices::say_why_cpu),
         Some(b) => Device::new(
             BackendKind::parse(b)
-                .ok_or_else(|| format!("unknown backend `{b}` (wgpu or vulkan)"))?,
+                .ok_or_else(|| format!("unknown backend `{b}` (wgpu, vulkan or cpu)"))?,
         ),
     }
     .map_err(|e| e.to_string())?;

@@ -51,7 +51,8 @@ struct RenderArgs {
     /// Embedded scene name (see `cohort scenes`) or a Mitsuba 3 XML file.
     #[arg(long, default_value = embedded::DEFAULT)]
     scene: String,
-    /// `wgpu` (WGSL) or `vulkan` (SPIR-V through ash); default: the best found.
+    /// `wgpu` (WGSL), `vulkan` (SPIR-V through ash) or `cpu` (the native CPU backend);
+    /// default: a real GPU if there is one, else `cpu`.
     #[arg(long)]
     backend: Option<String>,
     /// Diffuse sampling: `normal` (independent cosine sampling), or coherent sampling
