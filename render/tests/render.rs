@@ -192,12 +192,21 @@ fn converges_on_shared_scenes() {
 /// renders, not across pixels, measures the error).
 #[test]
 fn coherent_configurations_converge_to_normal() {
+    // The first GPU backend, and the CPU backend (whose group operations are its lane
+    // scheduler's, not a GPU's).
+    let devices: Vec<Device> = devices()
+        .into_iter()
+        .take(1)
+        .chain(Device::for_tests(BackendKind::Cpu))
+        .collect();
+    for d in &devices {
+        coherent_configurations_on(d);
+    }
+}
+
+fn coherent_configurations_on(d: &Device) {
     use cohort::Group;
     use cohort_render::{Algorithm, InPatch};
-    let d = match devices().into_iter().next() {
-        Some(d) => d,
-        None => return,
-    };
     let scene = shared("stanford-like");
     let seeds = 6u32;
     let run = |algorithm: Algorithm,
@@ -222,7 +231,7 @@ fn coherent_configurations_converge_to_normal() {
                     size: Some((16, 16)),
                     ..Default::default()
                 };
-                let mut r = Renderer::new(&d, &scene, opts).unwrap();
+                let mut r = Renderer::new(d, &scene, opts).unwrap();
                 let (img, _) = r.render(|_, _| {}).unwrap();
                 let m = img.mean();
                 ((m.x + m.y + m.z) / 3.0) as f64
@@ -280,7 +289,8 @@ fn coherent_configurations_converge_to_normal() {
         let se = (v + v0).sqrt();
         assert!(
             (m - m0).abs() < 5.0 * se + 0.01 * m0,
-            "{group:?} {in_patch:?} rr={rr} compact={compact} whole={whole:?}: mean {m:.4} vs normal {m0:.4} (se {se:.4})"
+            "{:?}: {group:?} {in_patch:?} rr={rr} compact={compact} whole={whole:?}: mean {m:.4} vs normal {m0:.4} (se {se:.4})",
+            d.info().backend
         );
     }
 }

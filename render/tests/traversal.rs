@@ -22,7 +22,7 @@ impl Rng {
 
 #[test]
 fn gpu_traversal_matches_host() {
-    let devices: Vec<Device> = [BackendKind::Vulkan, BackendKind::Wgpu]
+    let devices: Vec<Device> = [BackendKind::Vulkan, BackendKind::Wgpu, BackendKind::Cpu]
         .into_iter()
         .filter_map(Device::for_tests)
         .collect();
@@ -216,7 +216,7 @@ fn mismatches(gpu: &[Vec4], host: &[Option<cohort_scenes::Hit>], tris: &[Triangl
 /// the renderer's tree of every embedded scene, and the host's.
 #[test]
 fn compressed_traversal_matches_8_wide() {
-    let devices: Vec<Device> = [BackendKind::Vulkan, BackendKind::Wgpu]
+    let devices: Vec<Device> = [BackendKind::Vulkan, BackendKind::Wgpu, BackendKind::Cpu]
         .into_iter()
         .filter_map(Device::for_tests)
         .collect();
