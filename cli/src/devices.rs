@@ -21,7 +21,7 @@ pub fn say_why_cpu(d: &Device) {
     }
     let why = match Device::best_gpu() {
         Ok(gpu) => format!(
-            "the only Vulkan device is {}, a software driver, slower on the same cores              (--backend vulkan uses it anyway)",
+            "the only Vulkan device is {}, a software driver, slower on the same cores (--backend vulkan uses it anyway)",
             gpu.info().adapter_name
         ),
         Err(_) => "no Vulkan device found".to_string(),
