@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
 # The CPU backend against the software Vulkan driver on the same cores (issue 10): the
 # README's first command on each, alternated $ROUNDS times (default 3), paths/s per run.
-# Usage: scripts/cpu-vs-software.sh [extra render options]; binary: target/release/cohort.
+# Usage: scripts/cpu-vs-software.sh [extra render options]. Builds the release binary
+# first unless $BIN names one.
 set -euo pipefail
-BIN="${BIN:-target/release/cohort}"
+cd "$(dirname "$0")/.."
+if [ -z "${BIN:-}" ]; then
+  cargo build --release --locked -p cohort-cli
+  BIN=target/release/cohort
+fi
 ROUNDS="${ROUNDS:-3}"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
