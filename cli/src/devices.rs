@@ -13,31 +13,24 @@ fn backend_kind(backend: Option<&str>) -> Result<BackendKind, String> {
     }
 }
 
-/// When `Device::best` chose the CPU backend, says why (on stderr): no GPU, or only the
-/// software Vulkan driver, which is slower on the same cores.
-pub fn say_why_cpu(d: &Device) {
-    if d.info().backend != BackendKind::Cpu {
-        return;
+/// `Device::best`, with a note on stderr when it chose the CPU backend saying why (no GPU,
+/// or only the software Vulkan driver).
+pub fn best() -> Result<Device, String> {
+    let (device, why) = Device::best_explained().map_err(|e| e.to_string())?;
+    if let Some(why) = why {
+        eprintln!("note: rendering on the CPU backend: {why} (--backend names another)");
     }
-    let why = match Device::best_gpu() {
-        Ok(gpu) => format!(
-            "the only Vulkan device is {}, a software driver, slower on the same cores (--backend vulkan uses it anyway)",
-            gpu.info().adapter_name
-        ),
-        Err(_) => "no Vulkan device found".to_string(),
-    };
-    eprintln!("note: rendering on the CPU backend: {why}");
+    Ok(device)
 }
 
 /// Opens the devices of `--devices` on `--backend`; every index is checked before any
 /// work starts, so a bad one fails at once, naming the devices there are.
 pub fn open(backend: Option<&str>, devices: Option<&str>) -> Result<Vec<Device>, String> {
     let Some(list) = devices else {
-        let device = match backend {
-            None => Device::best().inspect(say_why_cpu),
-            Some(_) => Device::new(backend_kind(backend)?),
-        };
-        return Ok(vec![device.map_err(|e| e.to_string())?]);
+        return Ok(vec![match backend {
+            None => best()?,
+            Some(_) => Device::new(backend_kind(backend)?).map_err(|e| e.to_string())?,
+        }]);
     };
     let kind = backend_kind(backend)?;
     if list.trim() == "all" {

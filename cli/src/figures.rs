@@ -235,13 +235,13 @@ impl Row {
 pub fn run(a: FiguresArgs) -> Result<(), String> {
     let plan = parse_plan(&a)?;
     let device = match a.backend.as_deref() {
-        None => Device::best().inspect(crate::devices::say_why_cpu),
+        None => crate::devices::best()?,
         Some(b) => Device::new(
             BackendKind::parse(b)
                 .ok_or_else(|| format!("unknown backend `{b}` (wgpu, vulkan or cpu)"))?,
-        ),
-    }
-    .map_err(|e| e.to_string())?;
+        )
+        .map_err(|e| e.to_string())?,
+    };
     let info = device.info().clone();
     let device_name = format!("{} [{}]", info.adapter_name, info.backend.name());
     std::fs::create_dir_all(&plan.out_dir)

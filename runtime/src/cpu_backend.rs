@@ -143,15 +143,8 @@ impl CpuDevice {
     }
 
     pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
-        let b = self.own(raw, "read")?;
-        self.read_prefix(&b, dst);
+        read_prefix(&*self.own(raw, "read")?, dst);
         Ok(())
-    }
-
-    fn read_prefix(&self, b: &CpuBuffer, dst: &mut [u8]) {
-        assert!(dst.len() <= b.bytes());
-        // SAFETY: in range; no dispatch is running.
-        unsafe { std::ptr::copy_nonoverlapping(b.ptr(), dst.as_mut_ptr(), dst.len()) };
     }
 
     pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<Arc<CpuBuffer>> {
@@ -219,12 +212,19 @@ impl CpuDevice {
             .into_iter()
             .map(|(b, bytes)| {
                 let mut out = vec![0u8; bytes as usize];
-                self.read_prefix(&b, &mut out);
+                read_prefix(&b, &mut out);
                 out
             })
             .collect();
         Ok((stats, reads))
     }
+}
+
+/// Copies the first `dst.len()` bytes of `b`.
+fn read_prefix(b: &CpuBuffer, dst: &mut [u8]) {
+    assert!(dst.len() <= b.bytes());
+    // SAFETY: in range; no dispatch is running (submissions complete before they return).
+    unsafe { std::ptr::copy_nonoverlapping(b.ptr(), dst.as_mut_ptr(), dst.len()) };
 }
 
 fn cpu_name() -> String {

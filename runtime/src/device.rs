@@ -162,14 +162,20 @@ impl Device {
     /// limits), then wgpu. Without one, the CPU backend: on the same cores it renders
     /// faster than the software Vulkan driver (BENCHMARKS.md, "CPU backend").
     pub fn best() -> Result<Device> {
-        let gpu = Device::new(BackendKind::Vulkan)
-            .or_else(|_| Device::new(BackendKind::Wgpu))
-            .ok()
-            .filter(|d| !d.info().software_driver);
-        match gpu {
-            Some(d) => Ok(d),
-            None => Device::new(BackendKind::Cpu),
-        }
+        Device::best_explained().map(|(d, _)| d)
+    }
+
+    /// [`best`](Self::best), and when it chose the CPU backend, why (for a note to the user).
+    pub fn best_explained() -> Result<(Device, Option<String>)> {
+        let why = match Device::best_gpu() {
+            Ok(d) if !d.info().software_driver => return Ok((d, None)),
+            Ok(d) => format!(
+                "the only GPU device is {}, a software driver, slower on the same cores",
+                d.info().adapter_name
+            ),
+            Err(e) => format!("no GPU device ({e})"),
+        };
+        Ok((Device::new(BackendKind::Cpu)?, Some(why)))
     }
 
     /// [`best`](Self::best) among the GPU backends only (the software driver included):

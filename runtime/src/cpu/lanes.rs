@@ -152,16 +152,6 @@ impl<T: Copy> View<'_, T> {
         self.me
     }
 
-    /// How many lanes the scope has (active or not).
-    pub fn width(&self) -> u32 {
-        self.width
-    }
-
-    /// Whether lane `lane` of the scope was released with this one.
-    pub fn active(&self, lane: u32) -> bool {
-        lane < self.width && self.shared.released_state[(self.first + lane) as usize].get() != 0
-    }
-
     /// What lane `lane` posted, if it is active and posted a value.
     pub fn get(&self, lane: u32) -> Option<T> {
         if lane >= self.width {
@@ -380,14 +370,18 @@ pub(crate) fn run_workgroup(launch: &Launch<'_>, linear: u32, scratch: &mut Scra
             DefaultStack::new(STACK_BYTES).expect("the CPU backend could not map a lane stack"),
         );
     }
-    let ctxs: Vec<LaneCtx> = (0..n).map(|l| ctx_of(&builtins(l))).collect();
-    let args: Vec<LaneArgs<'_>> = (0..n)
-        .map(|l| LaneArgs {
-            b: builtins(l),
-            bufs: launch.bufs,
-            workgroup: &workgroup,
+    let (ctxs, args): (Vec<LaneCtx>, Vec<LaneArgs<'_>>) = (0..n)
+        .map(|l| {
+            let b = builtins(l);
+            let ctx = ctx_of(&b);
+            let args = LaneArgs {
+                b,
+                bufs: launch.bufs,
+                workgroup: &workgroup,
+            };
+            (ctx, args)
         })
-        .collect();
+        .unzip();
     let invoke = launch.kernel.invoke;
     let mut lanes: Vec<_> = scratch
         .stacks
