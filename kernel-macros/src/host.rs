@@ -82,6 +82,12 @@ impl VisitMut for HostOps {
         };
         *e = new;
     }
+    // A print's arguments are kernel expressions like any other (the format string stays).
+    fn visit_macro_mut(&mut self, m: &mut syn::Macro) {
+        if crate::print::is_print(m) {
+            crate::print::host_form(m, |e| HostOps.visit_expr_mut(e));
+        }
+    }
     // Constant contexts (`const` items, array lengths, types) keep Rust's own arithmetic.
     fn visit_item_mut(&mut self, _: &mut syn::Item) {}
     fn visit_type_mut(&mut self, _: &mut syn::Type) {}

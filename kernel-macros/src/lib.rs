@@ -14,6 +14,7 @@ mod derive;
 mod helper;
 mod host;
 mod kernel;
+mod print;
 mod rewrite;
 mod types_check;
 mod uniformity;

@@ -75,6 +75,15 @@ const LABEL_HINT: &str = "use a `let mut` flag that the outer loop tests";
 const NO_LABELS: &str =
     "loop labels are not supported in kernels; use a `let mut` flag that the outer loop tests";
 
+/// Why a macro other than the print macros is refused, and what to write instead.
+fn unsupported_macro(mac: &syn::Macro) -> String {
+    format!(
+        "macro `{}!` is not supported in kernels (kernels cannot panic or allocate); the only \
+         macros kernels take are `print!`, `println!`, `eprint!` and `eprintln!`",
+        mac.path.to_token_stream()
+    )
+}
+
 fn is_diverging(e: &Expr) -> bool {
     matches!(e, Expr::Break(_) | Expr::Continue(_) | Expr::Return(_))
 }
@@ -170,13 +179,8 @@ impl Rewriter {
             Stmt::Item(syn::Item::Const(c)) => Ok(c.to_token_stream()),
             Stmt::Item(i) => err_at(i, "only `const` items may be declared inside kernels; move other items out of the function"),
             Stmt::Expr(e, _) => self.stmt_expr(e),
-            Stmt::Macro(m) => err_at(
-                m,
-                format!(
-                    "macro `{}!` is not supported in kernels (kernels have no I/O or panics); remove it or move it to host code",
-                    m.mac.path.to_token_stream()
-                ),
-            ),
+            Stmt::Macro(m) if crate::print::is_print(&m.mac) => self.print_macro(&m.mac),
+            Stmt::Macro(m) => err_at(m, unsupported_macro(&m.mac)),
         }
     }
 
@@ -454,7 +458,7 @@ impl Rewriter {
 
     // ---------------------------------------------------------------- values
 
-    pub fn rv(&mut self, e: &Expr) -> Result<TokenStream> {
+    pub(crate) fn rv(&mut self, e: &Expr) -> Result<TokenStream> {
         let span = e.span();
         match e {
             Expr::Lit(l) => match &l.lit {
@@ -543,13 +547,8 @@ impl Rewriter {
             Expr::Closure(c) => err_at(c, "closures are only supported as the argument of `group_share`; use a #[kernel_fn] helper"),
             Expr::Range(r) => err_at(r, "ranges are only supported as the iterator of a `for` loop"),
             Expr::Try(t) => err_at(t.question_token, "the `?` operator is not supported in kernels; check with if/else instead"),
-            Expr::Macro(m) => err_at(
-                m,
-                format!(
-                    "macro `{}!` is not supported in kernels (kernels have no I/O or panics)",
-                    m.mac.path.to_token_stream()
-                ),
-            ),
+            Expr::Macro(m) if crate::print::is_print(&m.mac) => self.print_macro(&m.mac),
+            Expr::Macro(m) => err_at(m, unsupported_macro(&m.mac)),
             Expr::Let(l) => err_at(l, "`if let` / `let` patterns are not supported in kernels; use a boolean condition"),
             Expr::Async(a) => err_at(a.async_token, "`async` is not supported in kernels"),
             Expr::Await(a) => err_at(a, "`.await` is not supported in kernels"),

@@ -781,6 +781,23 @@ pub fn check_grid_closures(
             syn::visit::visit_block(self, b);
             self.locals.pop();
         }
+        // A `for` variable is a kernel value like a `let` (the loop binds it, not a `let`).
+        fn visit_expr_for_loop(&mut self, f: &'ast syn::ExprForLoop) {
+            self.visit_expr(&f.expr);
+            self.locals.push(HashSet::new());
+            if let Some((n, _)) = pat_name(&f.pat) {
+                match &mut self.in_closure {
+                    Some(c) => {
+                        c.insert(n);
+                    }
+                    None => {
+                        self.locals.last_mut().unwrap().insert(n);
+                    }
+                }
+            }
+            self.visit_block(&f.body);
+            self.locals.pop();
+        }
     }
     let mut v = V {
         params,

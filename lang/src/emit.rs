@@ -151,6 +151,7 @@ pub fn compile_with_host(
     });
     Ok(KernelArtifact {
         host,
+        prints: built.prints.clone(),
         name,
         entry_point: e.entry_point,
         wgsl: e.wgsl,

@@ -50,4 +50,7 @@ pub struct KernelArtifact {
     /// The kernel's own Rust function for the native CPU backend (`None` for kernels
     /// given only as WGSL / SPIR-V, which the CPU backend refuses).
     pub host: Option<crate::cpu::HostKernel>,
+    /// The kernel's `print!`-family calls, indexed by the site number its records carry
+    /// (empty for a kernel that does not print: it has no print binding).
+    pub prints: Vec<crate::print::PrintSite>,
 }

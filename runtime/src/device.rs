@@ -9,6 +9,7 @@
 use std::sync::Arc;
 
 use crate::buffer::{alloc_size, storage_binding_size, uniform_binding_size};
+use crate::print::{self, PrintSite};
 use crate::{
     cpu_backend, vulkan_backend, wgpu_backend, BackendKind, BindingKind, BufferArg, GpuBuffer,
     KernelArtifact, Result, RuntimeError,
@@ -324,6 +325,7 @@ impl Device {
         Batch {
             pending,
             device: self,
+            prints: Vec::new(),
         }
     }
 
@@ -385,6 +387,15 @@ enum Pending<'d> {
 pub struct Batch<'d> {
     pending: Pending<'d>,
     device: &'d Device,
+    /// The print buffers of the printing dispatches recorded so far.
+    prints: Vec<PendingPrint>,
+}
+
+/// A printing dispatch's buffer, read back with the batch and printed when it is waited for.
+struct PendingPrint {
+    kernel: String,
+    sites: Vec<PrintSite>,
+    read: ReadBack<u32>,
 }
 
 /// A buffer's contents as a batch copies them back after its dispatches: the handle
@@ -426,17 +437,23 @@ enum InFlight<'d> {
 /// without waiting waits for it.
 pub struct Submission<'d> {
     inner: InFlight<'d>,
+    prints: Vec<PendingPrint>,
 }
 
 impl Submission<'_> {
-    /// Waits until the GPU has run the batch.
+    /// Waits until the GPU has run the batch, then writes what its kernels printed to
+    /// stdout and stderr (a submission dropped without waiting prints nothing).
     pub fn wait(self) -> Result<Completed> {
         let (stats, reads) = match self.inner {
             InFlight::Wgpu(d, f) => d.wait_for(f)?,
             InFlight::Vulkan(f) => f.wait()?,
             InFlight::Done(stats, reads) => (stats, reads),
         };
-        Ok(Completed { stats, reads })
+        let completed = Completed { stats, reads };
+        for p in &self.prints {
+            print::emit(&p.kernel, &print::decode(&p.sites, &completed.read(p.read)));
+        }
+        Ok(completed)
     }
 }
 
@@ -447,6 +464,43 @@ impl<'d> Batch<'d> {
     }
 
     pub fn dispatch(
+        &mut self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: Dispatch<'_>,
+    ) -> Result<()> {
+        // A printing kernel gets a zeroed print buffer at its print binding (launches do
+        // not pass one); the CPU backend's lanes print directly, so it gets a small one.
+        let print_at = kernel
+            .bindings
+            .iter()
+            .position(|b| b.name == print::PRINT_BINDING);
+        let print_buffer = match print_at {
+            Some(at) if args.len() + 1 == kernel.bindings.len() && at <= args.len() => {
+                let words = match self.device.info().backend {
+                    BackendKind::Cpu => print::HEADER_WORDS + 1,
+                    _ => print::buffer_words(),
+                };
+                Some((at, self.device.alloc::<u32>(words)?))
+            }
+            _ => None,
+        };
+        let Some((at, buffer)) = &print_buffer else {
+            return self.record(kernel, args, dispatch);
+        };
+        let mut with_print = args.to_vec();
+        with_print.insert(*at, buffer.arg());
+        self.record(kernel, &with_print, dispatch)?;
+        let read = self.read_back(buffer)?;
+        self.prints.push(PendingPrint {
+            kernel: kernel.name.clone(),
+            sites: kernel.prints.clone(),
+            read,
+        });
+        Ok(())
+    }
+
+    fn record(
         &mut self,
         kernel: &KernelArtifact,
         args: &[BufferArg<'_>],
@@ -515,6 +569,7 @@ impl<'d> Batch<'d> {
 
     /// Submits everything as one command buffer and returns at once.
     pub fn submit_async(self) -> Result<Submission<'d>> {
+        let prints = self.prints;
         let inner = match self.pending {
             Pending::Wgpu(d, cmds, reads) => InFlight::Wgpu(d, d.submit_async(cmds, reads)?),
             Pending::Vulkan(d, cmds, reads) => InFlight::Vulkan(d.submit_async(cmds, reads)?),
@@ -523,7 +578,7 @@ impl<'d> Batch<'d> {
                 InFlight::Done(stats, reads)
             }
         };
-        Ok(Submission { inner })
+        Ok(Submission { inner, prints })
     }
 }
 
@@ -537,10 +592,16 @@ fn check_call(
 ) -> Result<()> {
     let name = || kernel.name.clone();
     if args.len() != kernel.bindings.len() {
-        let params: Vec<&str> = kernel.bindings.iter().map(|b| b.name.as_str()).collect();
+        // The print binding is the runtime's to pass, not the caller's.
+        let params: Vec<&str> = kernel
+            .bindings
+            .iter()
+            .map(|b| b.name.as_str())
+            .filter(|n| *n != print::PRINT_BINDING)
+            .collect();
         return Err(RuntimeError::ArgumentCount {
             kernel: name(),
-            expected: kernel.bindings.len(),
+            expected: params.len(),
             got: args.len(),
             params: params.join(", "),
         });

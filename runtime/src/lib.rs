@@ -11,7 +11,8 @@
 //! argument checks, batches), `buffer` (typed buffers and size rules), `wgpu_backend`,
 //! `vulkan_init` (opening a raw Vulkan device) and `vulkan_backend` (buffers, pipelines,
 //! submission on it), `cpu_backend` and `cpu` (the CPU backend and its lanes), `pipeline_cache` (compile once per device),
-//! `timing` (timestamp ticks → nanoseconds), `error`.
+//! `timing` (timestamp ticks → nanoseconds), `print` (kernels' print buffers, decoded after
+//! a dispatch), `error`.
 
 pub mod artifact;
 mod buffer;
@@ -22,6 +23,7 @@ mod disk_cache;
 mod error;
 mod float_controls;
 mod pipeline_cache;
+pub mod print;
 mod timing;
 mod vulkan_backend;
 mod vulkan_init;

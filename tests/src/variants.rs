@@ -46,6 +46,12 @@ pub fn all() -> Vec<Variant> {
             collatz::collatz::build,
         ),
         v(
+            &debug_print::debug_print::INFO,
+            "debug_print",
+            thread(&debug_print::debug_print::INFO),
+            debug_print::debug_print::build,
+        ),
+        v(
             &sort4::sort4::INFO,
             "sort4",
             thread(&sort4::sort4::INFO),

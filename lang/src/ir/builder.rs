@@ -75,6 +75,9 @@ pub(crate) struct Ctx {
     pub storage_buffers: u32,
     pub lengths: Option<Handle<naga::GlobalVariable>>,
     pub group_share_sites: u32,
+    /// The print binding once the kernel prints, and its print sites in site order.
+    pub print: Option<Handle<naga::GlobalVariable>>,
+    pub prints: Vec<cohort_runtime::print::PrintSite>,
     /// What the kernel asks for that this specialisation cannot lower (e.g. `group_any`
     /// at grid level): reported by `emit` as a compile error at the kernel's span.
     pub unsupported: Vec<String>,
@@ -165,6 +168,8 @@ impl Ctx {
             lengths: None,
             bindings: Vec::new(),
             group_share_sites: 0,
+            print: None,
+            prints: Vec::new(),
             unsupported: Vec::new(),
             inline_depth: 0,
             prologue: Prologue::default(),

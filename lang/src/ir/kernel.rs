@@ -25,6 +25,8 @@ pub struct BuiltKernel {
     pub uses_subgroups: bool,
     /// Operations this specialisation cannot lower; `emit` turns them into an error.
     pub unsupported: Vec<String>,
+    /// The kernel's print sites (`cohort_runtime::print`), in site order.
+    pub prints: Vec<cohort_runtime::print::PrintSite>,
     pub spec: Spec,
     pub info: &'static KernelInfo,
 }
@@ -61,6 +63,7 @@ pub fn build_kernel(
         bindings: ctx.bindings,
         uses_subgroups: ctx.uses_subgroups,
         unsupported: ctx.unsupported,
+        prints: ctx.prints,
         spec,
         info,
     }

@@ -9,6 +9,7 @@ pub mod group;
 pub mod kernel;
 pub mod math;
 pub mod ops;
+pub mod print;
 pub mod types;
 pub mod val;
 

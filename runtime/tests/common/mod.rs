@@ -64,6 +64,7 @@ pub fn artifact(
         bindings,
         features,
         host: None,
+        prints: Vec::new(),
     }
 }
 

@@ -6,6 +6,7 @@
 
 pub mod bits;
 pub mod collatz;
+pub mod debug_print;
 pub mod generic;
 pub mod group_pick;
 pub mod group_vote;
