@@ -49,6 +49,74 @@ const ATOMIC_METHODS: &[&str] = &[
     "store",
 ];
 
+/// Methods the kernel types have, called without the stand-in of `method_call` (which
+/// only improves the message when a method is missing, so this list needs not be
+/// complete: it keeps the generated code small for the common calls).
+const KNOWN_METHODS: &[&str] = &[
+    "abs",
+    "min",
+    "max",
+    "clamp",
+    "sqrt",
+    "dot",
+    "cross",
+    "normalize",
+    "length",
+    "length_squared",
+    "floor",
+    "ceil",
+    "round",
+    "fract",
+    "exp",
+    "ln",
+    "powf",
+    "powi",
+    "sin",
+    "cos",
+    "tan",
+    "atan2",
+    "mul_add",
+    "to_bits",
+    "recip",
+    "signum",
+    "is_nan",
+    "is_finite",
+    "len",
+    "is_empty",
+    "x",
+    "extend",
+    "truncate",
+    "min_element",
+    "max_element",
+    "element_sum",
+    "wrapping_add",
+    "wrapping_sub",
+    "wrapping_mul",
+    "count_ones",
+    "leading_zeros",
+    "trailing_zeros",
+    "exp2",
+    "log2",
+    "asin",
+    "acos",
+    "atan",
+    "sinh",
+    "cosh",
+    "tanh",
+    "rotate_left",
+    "rotate_right",
+    "reverse_bits",
+    "copysign",
+    "rem_euclid",
+    "div_euclid",
+    "abs_diff",
+    "lerp",
+    "reflect",
+    "distance",
+    "xyz",
+    "xy",
+];
+
 pub struct Rewriter {
     scopes: Vec<HashMap<String, Bind>>,
     /// Generic type parameters of the function (calls `T::f(..)` go to `T::__ir_f`).
@@ -640,7 +708,26 @@ impl Rewriter {
         } else {
             self.rv(&m.receiver)?
         };
-        Ok(quote_spanned! {span=> (#recv).#method(#(#args),*) })
+        let call = quote_spanned! {span=> (#recv).#method(#(#args),*) };
+        if KNOWN_METHODS.contains(&name.as_str()) || ATOMIC_METHODS.contains(&name.as_str()) {
+            return Ok(call);
+        }
+        // A method kernels may not have (e.g. one of the user's own struct): a stand-in
+        // trait method of that name, by reference so that any real method of `Val<T>`
+        // (by value) is found first, whose unsatisfiable bound makes rustc say what to
+        // write instead.
+        let hint = format_ident!("__CohortMethod_{}", name);
+        let params: Vec<_> = (0..args.len()).map(|i| format_ident!("A{i}")).collect();
+        Ok(quote_spanned! {span=> {
+            #[allow(non_camel_case_types, dead_code)]
+            trait #hint { fn #method<#(#params),*>(&self #(, _: #params)*) -> ::cohort::ir::Val<()>; }
+            impl<T: ::cohort::ir::MethodNeedsKernelFn> #hint for ::cohort::ir::Val<T> {
+                fn #method<#(#params),*>(&self #(, _: #params)*) -> ::cohort::ir::Val<()> {
+                    ::core::unreachable!()
+                }
+            }
+            #call
+        } })
     }
 
     fn is_bare_var(&self, e: &Expr) -> bool {

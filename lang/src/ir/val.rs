@@ -320,3 +320,13 @@ impl<T: GpuType> AutoDeref for Place<T> {
         self.get()
     }
 }
+
+/// Never implemented: the bound of the stand-in that `#[kernel]` puts in scope for a
+/// method call the kernel's types may not have, so that calling a method of one's own
+/// type in a kernel says what to write instead of only "no method found for `Val<T>`".
+#[doc(hidden)]
+#[diagnostic::on_unimplemented(
+    message = "kernels cannot call methods of `{Self}` defined in plain Rust",
+    note = "write the method as a #[kernel_fn] helper that takes the value as a parameter (e.g. `#[kernel_fn] fn area(s: Sphere) -> f32`) and call it as a function (`area(s)`)"
+)]
+pub trait MethodNeedsKernelFn {}
