@@ -1,6 +1,8 @@
 //! Image files that bitmap textures read: PNG (8 or 16 bits, grey or colour, with or without
-//! alpha) and OpenEXR, as linear RGB rows from the top, the way Mitsuba's `Bitmap` loads them
-//! (PNG values are sRGB-encoded unless the texture is `raw`; EXR values are linear).
+//! alpha), JPEG, BMP, OpenEXR and Radiance HDR, as linear RGB rows from the top, the way
+//! Mitsuba's `Bitmap` loads them (integer formats are sRGB-encoded unless the texture is
+//! `raw`; EXR and HDR values are linear). BMP and HDR have their own files (`image_bmp`,
+//! `image_hdr`).
 
 use std::path::Path;
 
@@ -22,9 +24,13 @@ pub fn read_image(path: &Path, raw: bool) -> Result<Image, String> {
         .unwrap_or_default();
     let image = match ext.as_str() {
         "png" => read_png(path, raw),
+        "jpg" | "jpeg" => read_jpeg(path, raw),
+        "bmp" => crate::image_bmp::read_bmp(&read_bytes(path)?, raw),
+        "hdr" | "rgbe" | "pic" => crate::image_hdr::read_hdr(&read_bytes(path)?),
         "exr" => read_exr(path),
         other => Err(format!(
-            "image format '{other}' is not supported for textures (PNG and OpenEXR are; convert it)"
+            "image format '{other}' is not supported for textures (PNG, JPEG, BMP, OpenEXR and \
+             Radiance HDR are; convert it)"
         )),
     }?;
     if image.width == 0 || image.height == 0 {
@@ -40,6 +46,66 @@ fn srgb_to_linear(v: f32) -> f32 {
     } else {
         ((v + 0.055) / 1.055).powf(2.4)
     }
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("cannot open it: {e}"))
+}
+
+/// Texels from `channels` samples per pixel (1 or 2: grey with optional alpha, which
+/// Mitsuba reads as one channel; 3 or 4: RGB with optional alpha), given as values in
+/// [0, 1] in row order from the top; sRGB-decoded unless `raw`.
+pub(crate) fn texels_from_samples(
+    width: u32,
+    height: u32,
+    channels: usize,
+    sample: impl Fn(usize) -> f32,
+    raw: bool,
+) -> Image {
+    let decode = |v: f32| if raw { v } else { srgb_to_linear(v) };
+    let texels = (0..width as usize * height as usize)
+        .map(|p| {
+            let base = p * channels;
+            match channels {
+                1 | 2 => Vec3::splat(decode(sample(base))),
+                _ => Vec3::new(
+                    decode(sample(base)),
+                    decode(sample(base + 1)),
+                    decode(sample(base + 2)),
+                ),
+            }
+        })
+        .collect();
+    Image {
+        width,
+        height,
+        texels,
+    }
+}
+
+fn read_jpeg(path: &Path, raw: bool) -> Result<Image, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open it: {e}"))?;
+    let mut decoder = jpeg_decoder::Decoder::new(std::io::BufReader::new(file));
+    let pixels = decoder
+        .decode()
+        .map_err(|e| format!("cannot read it as JPEG: {e}"))?;
+    let info = decoder.info().ok_or("cannot read it as JPEG: no image")?;
+    let channels = match info.pixel_format {
+        jpeg_decoder::PixelFormat::L8 => 1,
+        jpeg_decoder::PixelFormat::RGB24 => 3,
+        other => {
+            return Err(format!(
+                "JPEG pixel format {other:?} is not supported (8-bit grey and RGB are)"
+            ))
+        }
+    };
+    Ok(texels_from_samples(
+        info.width as u32,
+        info.height as u32,
+        channels,
+        |i| pixels[i] as f32 / 255.0,
+        raw,
+    ))
 }
 
 fn read_png(path: &Path, raw: bool) -> Result<Image, String> {
@@ -63,27 +129,13 @@ fn read_png(path: &Path, raw: bool) -> Result<Image, String> {
             buf[i] as f32 / 255.0
         }
     };
-    let decode = |v: f32| if raw { v } else { srgb_to_linear(v) };
-    let (w, h) = (info.width as usize, info.height as usize);
-    let mut texels = Vec::with_capacity(w * h);
-    for p in 0..w * h {
-        let base = p * channels;
-        let c = match channels {
-            // Grey (with alpha): Mitsuba reads Y[A] as one channel.
-            1 | 2 => Vec3::splat(decode(sample(base))),
-            _ => Vec3::new(
-                decode(sample(base)),
-                decode(sample(base + 1)),
-                decode(sample(base + 2)),
-            ),
-        };
-        texels.push(c);
-    }
-    Ok(Image {
-        width: info.width,
-        height: info.height,
-        texels,
-    })
+    Ok(texels_from_samples(
+        info.width,
+        info.height,
+        channels,
+        sample,
+        raw,
+    ))
 }
 
 fn read_exr(path: &Path) -> Result<Image, String> {
