@@ -38,6 +38,8 @@ enum Command {
     Scenes,
     /// Run the paper's experiments (Figs. 4, 5, 7): a CSV and plots (docs/FIGURES.md).
     Figures(figures::FiguresArgs),
+    /// Merge the CSVs of a sweep's shards (`figures --shard K/N`) into figures.csv and the plots.
+    FiguresMerge(figures::merge::MergeArgs),
     /// Merge the EXRs of a render's shards (`render --shard K/N`) into one image.
     Merge(merge::MergeArgs),
     /// Compare two EXRs: the same image, bit for bit or within float summation order?
@@ -174,6 +176,7 @@ fn main() -> ExitCode {
         }
         Command::Render(a) => render(a),
         Command::Figures(a) => figures::run(a),
+        Command::FiguresMerge(a) => figures::merge::run(a),
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Devices => devices::list(),

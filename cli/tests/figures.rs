@@ -1,6 +1,7 @@
 //! `cohort figures` end to end on a tiny sweep: the CSV's rows and columns, the
 //! round-robin groups (`normal` measured with every N, ratios against it), the plots, the
-//! cached reference, and clear errors for bad lists.
+//! cached reference, clear errors for bad lists, and a sweep split into shards
+//! (`--shard K/N`) that `cohort figures-merge` puts back together.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -382,6 +383,8 @@ fn bad_lists_fail_naming_the_value() {
         (vec!["--columns", "rr,rr"], "`rr`"),
         (vec!["--end-continue", "0"], "--end-continue"),
         (vec!["--integrator", "photon"], "photon"),
+        (vec!["--shard", "3/3"], "--shard"),
+        (vec!["--shard", "1"], "K/N"),
     ] {
         let out = cohort()
             .arg("figures")
@@ -399,5 +402,297 @@ fn bad_lists_fail_naming_the_value() {
     }
     // Nothing was rendered or written.
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The sweep of the shard test: one scene, two configurations, two N, the three columns,
+/// no Fig. 7: 6 groups of 3 points. The CPU backend, so that it runs anywhere.
+const SHARDED: &[&str] = &[
+    "figures",
+    "--scenes",
+    "cornell",
+    "--configs",
+    "warp,grid",
+    "--n",
+    "4,16",
+    "--time",
+    "0.02",
+    "--reference-time",
+    "0.1",
+    "--width",
+    "32",
+    "--height",
+    "32",
+    "--interleave",
+    "none",
+    "--slices",
+    "2",
+    "--backend",
+    "cpu",
+];
+
+/// The columns that say which point a row is (the measured values differ between runs).
+const KEY_COLUMNS: &[&str] = &[
+    "scene",
+    "width",
+    "height",
+    "config",
+    "label",
+    "n",
+    "rr",
+    "compaction",
+    "interleave",
+    "seed",
+    "time_budget_s",
+    "group_n",
+];
+
+fn keys(rows: &[HashMap<String, String>]) -> Vec<Vec<String>> {
+    rows.iter()
+        .map(|r| KEY_COLUMNS.iter().map(|k| r[*k].clone()).collect())
+        .collect()
+}
+
+/// A shard's CSV without its `#` lines: figures.csv's header and rows.
+fn shard_rows(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(text.starts_with("# cohort figures shard"), "{text}");
+    let body: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    parse_csv(&body).1
+}
+
+fn merge(shards: &[PathBuf], out_dir: &Path) -> std::process::Output {
+    cohort()
+        .arg("figures-merge")
+        .args(shards)
+        .arg("--out-dir")
+        .arg(out_dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn shards_merge_into_the_unsharded_csv_and_plots() {
+    let dir = tempdir();
+    let whole = dir.join("whole");
+    let out = cohort()
+        .args(SHARDED)
+        .arg("--out-dir")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (_, whole_rows) = parse_csv(&std::fs::read_to_string(whole.join("figures.csv")).unwrap());
+    assert_eq!(whole_rows.len(), 6 * 3);
+
+    // Three shards at once, sharing an out dir that already holds the reference.
+    let sharded = dir.join("shards");
+    std::fs::create_dir_all(&sharded).unwrap();
+    std::fs::copy(
+        whole.join("reference_cornell_32x32.exr"),
+        sharded.join("reference_cornell_32x32.exr"),
+    )
+    .unwrap();
+    let running: Vec<_> = (0..3)
+        .map(|k| {
+            cohort()
+                .args(SHARDED)
+                .args(["--shard", &format!("{k}/3"), "--out-dir"])
+                .arg(&sharded)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for (k, child) in running.into_iter().enumerate() {
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "shard {k}: {stderr}");
+        assert!(
+            stderr.contains("reusing the reference"),
+            "shard {k}: {stderr}"
+        );
+    }
+    let shard_path = |k: u32| sharded.join(format!("figures.shard-{k}-of-3.csv"));
+    let shards: Vec<PathBuf> = (0..3).map(shard_path).collect();
+
+    // Whole groups, dealt round-robin in the plan's order (column, then N): shard K has
+    // groups K and K + 3 of path/4, path/16, rr/4, rr/16, rr-no/4, rr-no/16.
+    let groups = [
+        ("path", "true", "4"),
+        ("path", "true", "16"),
+        ("group", "true", "4"),
+        ("group", "true", "16"),
+        ("group", "false", "4"),
+        ("group", "false", "16"),
+    ];
+    let mut union = Vec::new();
+    for (k, path) in shards.iter().enumerate() {
+        let rows = shard_rows(path);
+        let mut of_groups: Vec<(&str, &str, &str)> = rows
+            .iter()
+            .map(|r| {
+                let g = groups
+                    .iter()
+                    .find(|g| {
+                        (g.0, g.1, g.2) == (&r["rr"][..], &r["compaction"][..], &r["group_n"][..])
+                    })
+                    .unwrap_or_else(|| panic!("shard {k}: row of no group: {r:?}"));
+                *g
+            })
+            .collect();
+        of_groups.dedup();
+        assert_eq!(of_groups, vec![groups[k], groups[k + 3]], "shard {k}");
+        assert_eq!(rows.len(), 2 * 3, "shard {k}: whole groups");
+        union.extend(keys(&rows));
+    }
+    // Disjoint, and together every point of the unsharded run.
+    let mut sorted = union.clone();
+    sorted.sort();
+    sorted.dedup();
+    assert_eq!(sorted.len(), union.len(), "a point is in two shards");
+    let mut expected = keys(&whole_rows);
+    expected.sort();
+    assert_eq!(sorted, expected);
+    // Shards write no plots and no figures.csv.
+    for entry in std::fs::read_dir(&sharded).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(
+            name.starts_with("figures.shard-") || name.starts_with("reference_"),
+            "a shard wrote {name}"
+        );
+    }
+
+    // The merge: the unsharded run's rows in its order, each as its shard wrote it, and
+    // the plots.
+    let merged = dir.join("merged");
+    let out = merge(
+        &[shards[2].clone(), shards[0].clone(), shards[1].clone()],
+        &merged,
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("warning"), "one reference: {stderr}");
+    let merged_text = std::fs::read_to_string(merged.join("figures.csv")).unwrap();
+    let (header, merged_rows) = parse_csv(&merged_text);
+    let (whole_header, _) = parse_csv(&std::fs::read_to_string(whole.join("figures.csv")).unwrap());
+    assert_eq!(header, whole_header);
+    assert_eq!(keys(&merged_rows), keys(&whole_rows));
+    let shard_texts: Vec<String> = shards
+        .iter()
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .collect();
+    for line in merged_text.lines().skip(1) {
+        let holders = shard_texts
+            .iter()
+            .filter(|t| t.lines().any(|l| l == line))
+            .count();
+        assert_eq!(
+            holders, 1,
+            "merged row not copied from exactly one shard: {line}"
+        );
+    }
+    for stem in ["fig4_cornell", "fig5_cornell"] {
+        assert_image(&merged.join(format!("{stem}.png")), b"PNG");
+        assert_image(&merged.join(format!("{stem}.svg")), b"<svg");
+    }
+    let names: Vec<String> = std::fs::read_dir(&merged)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+
+    // Refusals, each naming what is wrong; nothing is written.
+    let refused = dir.join("refused");
+    let fails = |inputs: &[PathBuf], needles: &[&str]| {
+        let out = merge(inputs, &refused);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{inputs:?} should fail");
+        for needle in needles {
+            assert!(
+                stderr.contains(needle),
+                "{inputs:?}: `{needle}` not in {stderr}"
+            );
+        }
+        assert!(!refused.join("figures.csv").exists());
+    };
+    // A missing shard.
+    fails(
+        &[shards[0].clone(), shards[2].clone()],
+        &["shard 1/3 missing"],
+    );
+    // A shard twice.
+    fails(
+        &[shards[0].clone(), shards[1].clone(), shards[0].clone()],
+        &["both shard 0/3"],
+    );
+    // A shard of another plan (another seed).
+    let other_dir = dir.join("other");
+    std::fs::create_dir_all(&other_dir).unwrap();
+    let other = other_dir.join("figures.shard-1-of-3.csv");
+    assert!(shard_texts[1].contains("\n# seed=1\n"));
+    std::fs::write(
+        &other,
+        shard_texts[1].replace("\n# seed=1\n", "\n# seed=2\n"),
+    )
+    .unwrap();
+    fails(
+        &[shards[0].clone(), other.clone(), shards[2].clone()],
+        &[&other.display().to_string(), "seed `2`, not `1`"],
+    );
+    // A malformed row: the file and its line.
+    let lines: Vec<&str> = shard_texts[1].lines().collect();
+    let last = lines.len();
+    let malformed = other_dir.join("malformed.csv");
+    let mut text = lines[..last - 1].join("\n");
+    text.push('\n');
+    text.push_str(&lines[last - 1].replacen(',', ";", 1));
+    std::fs::write(&malformed, text).unwrap();
+    fails(
+        &[shards[0].clone(), malformed.clone(), shards[2].clone()],
+        &[&format!("{}: line {last}", malformed.display())],
+    );
+    // An interrupted shard: its last row is missing.
+    let interrupted = other_dir.join("interrupted.csv");
+    std::fs::write(&interrupted, lines[..last - 1].join("\n")).unwrap();
+    fails(
+        &[shards[0].clone(), interrupted.clone(), shards[2].clone()],
+        &[&interrupted.display().to_string(), "incomplete"],
+    );
+    // A shard measured against another reference merges, with a warning.
+    let reference_line = shard_texts[1]
+        .lines()
+        .find(|l| l.starts_with("# reference.cornell=32x32 fnv1a-64:"))
+        .unwrap();
+    let own_reference = other_dir.join("own-reference.csv");
+    let text = shard_texts[1].replace(reference_line, "# reference.cornell=32x32 fnv1a-64:0");
+    std::fs::write(&own_reference, text).unwrap();
+    let out = merge(
+        &[shards[0].clone(), own_reference.clone(), shards[2].clone()],
+        &other_dir.join("merged"),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning") && stderr.contains("different references"),
+        "{stderr}"
+    );
+    // figures.csv of an unsharded run is not a shard.
+    fails(
+        &[whole.join("figures.csv")],
+        &[
+            &whole.join("figures.csv").display().to_string(),
+            "not a shard",
+        ],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
