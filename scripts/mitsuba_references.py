@@ -271,6 +271,38 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Rough plastic: Mitsuba's defaults (Beckmann, alpha 0.1) on a sphere with a colour, a
+    # rough GGX nonlinear cube of another index, and a textured GGX slab (a checkerboard as
+    # the diffuse reflectance), lit by the area light and a sky.
+    "roughplastic": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.15, 0.15, 0.2"/></emitter>'
+        + """<shape type="sphere">
+        <point name="center" value="-0.45, 0.35, 0.1"/><float name="radius" value="0.33"/>
+        <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.1, 0.3, 0.6"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
+        <bsdf type="roughplastic">
+            <string name="distribution" value="ggx"/><float name="alpha" value="0.3"/>
+            <rgb name="diffuse_reflectance" value="0.7, 0.2, 0.1"/>
+            <float name="int_ior" value="1.7"/>
+            <boolean name="nonlinear" value="true"/>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale x="0.5" y="0.01" z="0.4"/><translate y="0.01" z="0.45"/></transform>
+        <bsdf type="roughplastic">
+            <string name="distribution" value="ggx"/><float name="alpha" value="0.15"/>
+            <texture type="checkerboard" name="diffuse_reflectance">
+                <rgb name="color0" value="0.8, 0.8, 0.2"/><rgb name="color1" value="0.1, 0.2, 0.5"/>
+                <transform name="to_uv"><scale value="4"/></transform>
+            </texture>
+        </bsdf>
+    </shape>""",
+    ),
     # A 32 x 32 crop window of a 64 x 48 film: the field of view and aspect are the film's.
     "crop": scene(
         "",

@@ -417,11 +417,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // Conductors are one-sided, as in Mitsuba: the back absorbs.
                 let glossy = m.kind == ROUGH_CONDUCTOR && (front || two_sided);
                 let plastic = m.kind == PLASTIC && (front || two_sided);
+                let rough_plastic = m.kind == ROUGH_PLASTIC && (front || two_sided);
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse || glossy || plastic)
+                    if (diffuse || glossy || plastic || rough_plastic)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -502,6 +503,15 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                         * c
                                         * core::f32::consts::FRAC_1_PI);
                                 pdf_b = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
+                            } else if rough_plastic {
+                                let fr = crate::sampling::frame(n);
+                                let wo = fr.transpose() * -d;
+                                let wl = fr.transpose() * wi;
+                                let t_i = crate::rough_plastic::transmittance(textures, m, wo.z);
+                                let t_o = crate::rough_plastic::transmittance(textures, m, wl.z);
+                                let e = crate::rough_plastic::eval(wo, wl, m, albedo, t_i, t_o);
+                                fc = e.truncate();
+                                pdf_b = e.w;
                             } else {
                                 let fr = crate::sampling::frame(n);
                                 let e = microfacet_eval(
@@ -569,6 +579,44 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
                     }
                     alive = true;
+                } else if rough_plastic {
+                    // Mitsuba `roughplastic`: the coating's glossy reflection or the base,
+                    // chosen by their shares; each weighted by its own lobe over the
+                    // probability of choosing it (unbiased without the other lobe's
+                    // density); the mixture's density serves MIS.
+                    let fr = crate::sampling::frame(n);
+                    let wo = fr.transpose() * -d;
+                    let t_i = crate::rough_plastic::transmittance(textures, m, wo.z);
+                    let ps = crate::rough_plastic::specular_probability(t_i, albedo, m);
+                    let wi: Vec3;
+                    let mut weight = Vec3::ZERO;
+                    if uniform(key, 4) < ps {
+                        let beckmann = m.flags & BECKMANN != 0;
+                        let mn = microfacet_sample(wo, m.conductor_k.x, beckmann, u);
+                        wi = mn * (2.0 * wo.dot(mn)) - wo;
+                        let e = microfacet_eval(wo, wi, m.conductor_k.x, beckmann);
+                        if wi.z > 0.0 && e.y > 0.0 {
+                            let fresnel = fresnel_dielectric(e.z, m.param);
+                            weight = m.transmittance * (fresnel * e.x / (e.y * ps));
+                        }
+                    } else {
+                        let s = S::sample(n, u, shared_patch, f.patches_n);
+                        wi = fr.transpose() * s.truncate();
+                        if wi.z > 0.0 {
+                            let t_o = crate::rough_plastic::transmittance(textures, m, wi.z);
+                            weight = crate::rough_plastic::base(albedo, m)
+                                * (t_i * t_o * s.w / (1.0 - ps));
+                        }
+                    }
+                    if weight.max_element() > 0.0 {
+                        let t_o = crate::rough_plastic::transmittance(textures, m, wi.z);
+                        let e = crate::rough_plastic::eval(wo, wi, m, albedo, t_i, t_o);
+                        new_d = fr * wi;
+                        thr = thr * weight;
+                        alive = true;
+                        bsdf_pdf = e.w;
+                        env_pdf = f.env_light * wi.z * core::f32::consts::FRAC_1_PI;
+                    }
                 } else if m.kind == CONDUCTOR && (front || two_sided) {
                     let cos_i = -d.dot(n);
                     new_d = d + n * (2.0 * cos_i);

@@ -41,6 +41,9 @@ pub const ROUGH_CONDUCTOR: u32 = 2;
 pub const DIELECTRIC: u32 = 3;
 /// Mitsuba `plastic`: `color` diffuse, `transmittance` specular reflectance, `param` eta.
 pub const PLASTIC: u32 = 4;
+/// Mitsuba `roughplastic`: `color` diffuse, `transmittance` specular reflectance, `param`
+/// eta, `conductor_k` (alpha, internal reflectance, 0), `table` its transmittance table.
+pub const ROUGH_PLASTIC: u32 = 5;
 /// `Material::flags` bits.
 pub const TWO_SIDED: u32 = 1;
 pub const EMITTER: u32 = 2;
@@ -74,7 +77,9 @@ pub struct Material {
     pub opacity: f32,
     /// Index + 1 of the header of the texture whose luminance is the opacity; 0: `opacity`.
     pub opacity_texture: u32,
-    pub pad0: u32,
+    /// Rough plastic: index + 1 of the header of its external transmittance table (a 64 x 1
+    /// texture over the incident cosine, `cohort_scenes::rough_plastic`); else 0.
+    pub table: u32,
     pub pad1: u32,
 }
 

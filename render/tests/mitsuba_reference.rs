@@ -289,6 +289,11 @@ fn plastic_bsdf() {
 }
 
 #[test]
+fn rough_plastic_bsdf_beckmann_ggx_nonlinear_textured() {
+    check("roughplastic");
+}
+
+#[test]
 fn film_crop_window() {
     check("crop");
 }

@@ -28,6 +28,7 @@ pub mod mitsuba;
 pub mod morton;
 pub mod obj;
 pub mod ply;
+pub mod rough_plastic;
 pub mod scene;
 pub mod serialized;
 pub mod shapes;

@@ -44,6 +44,20 @@ pub enum Bsdf {
         specular_reflectance: Vec3,
         nonlinear: bool,
     },
+    /// Mitsuba `roughplastic`: [`Bsdf::Plastic`] with a rough (microfacet) coating: its
+    /// glossy reflection, and the base's light through the rough interface, weighted by
+    /// the precomputed transmittance table ([`crate::rough_plastic`]) stored as texture
+    /// `table` of the scene.
+    RoughPlastic {
+        eta: f32,
+        alpha: f32,
+        distribution: Microfacet,
+        diffuse_reflectance: Vec3,
+        specular_reflectance: Vec3,
+        nonlinear: bool,
+        internal_reflectance: f32,
+        table: u32,
+    },
 }
 
 /// A microfacet normal distribution (Mitsuba's `distribution`).
@@ -217,6 +231,30 @@ impl Material {
                     eta,
                 )
             }
+            Bsdf::RoughPlastic {
+                eta,
+                alpha,
+                distribution,
+                diffuse_reflectance,
+                specular_reflectance,
+                nonlinear,
+                internal_reflectance,
+                table: _,
+            } => {
+                if nonlinear {
+                    flags |= GpuMaterial::FLAG_NONLINEAR;
+                }
+                if distribution == Microfacet::Beckmann {
+                    flags |= GpuMaterial::FLAG_BECKMANN;
+                }
+                conductor_k = Vec3::new(alpha, internal_reflectance, 0.0);
+                (
+                    GpuMaterial::ROUGH_PLASTIC,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    eta,
+                )
+            }
         };
         if self.two_sided {
             flags |= GpuMaterial::FLAG_TWO_SIDED;
@@ -239,7 +277,7 @@ impl Material {
             texture: 0,
             opacity: self.mask.map_or(1.0, |m| m.opacity),
             opacity_texture: 0,
-            pad0: 0,
+            table: 0,
             pad1: 0,
         }
     }
@@ -251,16 +289,17 @@ impl Material {
 /// | offset | field | meaning |
 /// |---|---|---|
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
-/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4 |
+/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
 /// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
-/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index), else zero |
+/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); else zero |
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
-/// | 72 | `pad0`, `pad1: u32` | zero |
+/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture), else 0 |
+/// | 76 | `pad1: u32` | zero |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -274,7 +313,7 @@ pub struct GpuMaterial {
     pub texture: u32,
     pub opacity: f32,
     pub opacity_texture: u32,
-    pub pad0: u32,
+    pub table: u32,
     pub pad1: u32,
 }
 
@@ -284,6 +323,7 @@ impl GpuMaterial {
     pub const ROUGH_CONDUCTOR: u32 = 2;
     pub const DIELECTRIC: u32 = 3;
     pub const PLASTIC: u32 = 4;
+    pub const ROUGH_PLASTIC: u32 = 5;
     pub const FLAG_TWO_SIDED: u32 = 1;
     pub const FLAG_EMITTER: u32 = 2;
     pub const FLAG_NONLINEAR: u32 = 4;

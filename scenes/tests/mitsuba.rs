@@ -266,7 +266,7 @@ fn unsupported_features_warn_with_file_and_line() {
         r#"
     <shape type="sdfgrid"/>
     <shape type="rectangle">
-        <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf>
+        <bsdf type="principled"><rgb name="base_color" value="0.2, 0.4, 0.6"/></bsdf>
     </shape>
     <shape type="rectangle">
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
@@ -297,15 +297,12 @@ fn unsupported_features_warn_with_file_and_line() {
         );
     };
     warned_at(r#"type="sdfgrid""#, "shape 'sdfgrid' is not supported");
-    warned_at(
-        r#"type="roughplastic""#,
-        "bsdf 'roughplastic' is not supported",
-    );
+    warned_at(r#"type="principled""#, "bsdf 'principled' is not supported");
     warned_at("roughness", "'roughness'");
     warned_at("envmap", "emitter 'envmap' is not supported");
     warned_at("roughconductor", "anisotropic");
     warned_at("<wibble/>", "<wibble>");
-    // The stand-in for roughplastic keeps its colour.
+    // The stand-in for principled keeps its colour.
     let s = &loaded.scene;
     assert!(s.materials.iter().any(|m| m.bsdf
         == Bsdf::Diffuse {

@@ -628,8 +628,8 @@ fn unsupported_plugins_strict_and_lenient() {
             "skipped",
         ),
         (
-            r#"<shape type="rectangle"><bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
-            "bsdf 'roughplastic'",
+            r#"<shape type="rectangle"><bsdf type="principled"><rgb name="base_color" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
+            "bsdf 'principled'",
             "diffuse [0.2, 0.4, 0.6]",
         ),
         (

@@ -259,12 +259,16 @@ fn textures_are_read_as_mitsuba_reads_them() {
     std::fs::write(&path, xml).unwrap();
     let e = load_mitsuba(&path).unwrap_err().to_string();
     assert!(e.contains("image file 'missing.png' not found"), "{e}");
-    // Formats other than PNG and OpenEXR are refused at the texture, by name.
-    std::fs::write(dir.join("t.jpg"), b"not really").unwrap();
-    let xml = xml.replace("missing.png", "t.jpg");
-    std::fs::write(&path, xml).unwrap();
+    // Formats other than PNG, JPEG, BMP, OpenEXR and HDR are refused at the texture, by
+    // name; a broken file of a supported format says what is wrong with it.
+    std::fs::write(dir.join("t.tga"), b"not really").unwrap();
+    std::fs::write(&path, xml.replace("missing.png", "t.tga")).unwrap();
     let e = load_mitsuba(&path).unwrap_err().to_string();
-    assert!(e.contains("'jpg' is not supported"), "{e}");
+    assert!(e.contains("'tga' is not supported"), "{e}");
+    std::fs::write(dir.join("t.jpg"), b"not really").unwrap();
+    std::fs::write(&path, xml.replace("missing.png", "t.jpg")).unwrap();
+    let e = load_mitsuba(&path).unwrap_err().to_string();
+    assert!(e.contains("t.jpg': cannot read it as JPEG"), "{e}");
 }
 
 /// Mitsuba `mask`: its opacity as a number, a colour (its luminance) or a texture; a

@@ -1,5 +1,5 @@
 //! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Supported: diffuse, conductor, roughconductor,
-//! dielectric, twosided (each parameter read or reported). Other plugins are errors, or under
+//! dielectric, plastic, roughplastic, mask, twosided (each parameter read or reported). Other plugins are errors, or under
 //! `--lenient` replaced by the nearest supported BSDF with a warning saying which.
 
 use glam::Vec3;
@@ -20,6 +20,7 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "roughconductor",
     "dielectric",
     "plastic",
+    "roughplastic",
     "twosided",
     "mask",
 ];
@@ -244,6 +245,11 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             texture = t;
             b
         }
+        "roughplastic" => {
+            let (b, t) = rough_plastic(ctx, obj)?;
+            texture = t;
+            b
+        }
         "twosided" => return twosided(ctx, obj),
         "mask" => return mask(ctx, obj),
         _ => return stand_in(ctx, obj),
@@ -297,6 +303,53 @@ fn plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Bsdf, Option<u32>), S
         diffuse_reflectance,
         specular_reflectance,
         nonlinear: obj.boolean("nonlinear")?.unwrap_or(false),
+    };
+    Ok((bsdf, texture))
+}
+
+/// Mitsuba `roughplastic`: [`plastic`]'s parameters plus the coating's `distribution`
+/// (default Beckmann) and `alpha` (0.1). Its transmittance table becomes one more texture.
+fn rough_plastic<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<(Bsdf, Option<u32>), SceneError> {
+    let distribution = distribution(obj)?;
+    let alpha = alpha(ctx, obj)?;
+    if alpha <= 0.0 {
+        return Err(syntax(
+            obj.loc_of("alpha"),
+            "roughplastic needs alpha > 0 (use plastic for a smooth coating)",
+        ));
+    }
+    let (plastic, texture) = plastic(ctx, obj)?;
+    let Bsdf::Plastic {
+        eta,
+        diffuse_reflectance,
+        specular_reflectance,
+        nonlinear,
+    } = plastic
+    else {
+        unreachable!("plastic() makes a Bsdf::Plastic")
+    };
+    let tables = crate::rough_plastic::tables(alpha, distribution == Microfacet::Beckmann, eta);
+    ctx.textures.push(crate::texture::Texture::Bitmap {
+        width: crate::rough_plastic::TABLE_SIZE as u32,
+        height: 1,
+        texels: tables
+            .external_transmittance
+            .iter()
+            .map(|&t| Vec3::splat(t))
+            .collect(),
+        filter: crate::texture::Filter::Bilinear,
+        wrap: crate::texture::Wrap::Clamp,
+        to_uv: crate::texture::UvTransform::IDENTITY,
+    });
+    let bsdf = Bsdf::RoughPlastic {
+        eta,
+        alpha,
+        distribution,
+        diffuse_reflectance,
+        specular_reflectance,
+        nonlinear,
+        internal_reflectance: tables.internal_reflectance,
+        table: (ctx.textures.len() - 1) as u32,
     };
     Ok((bsdf, texture))
 }
