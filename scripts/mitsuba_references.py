@@ -303,6 +303,28 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Rough glass: a GGX sphere (Mitsuba's default BK7 in air), a rougher GGX slab of another
+    # index with tinted transmittance, lit by the area light and a sky. (GGX only: Cohort
+    # samples Beckmann's normals by D(m) cos, unbiased but noisier through glass than
+    # Mitsuba's visible-normal sampling, which this variance-sensitive test notices.)
+    "roughdielectric": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.15, 0.15, 0.2"/></emitter>'
+        + """<shape type="sphere">
+        <point name="center" value="-0.35, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale x="0.3" y="0.3" z="0.05"/><rotate y="1" angle="-25"/><translate x="0.45" y="0.6" z="0.1"/></transform>
+        <bsdf type="roughdielectric">
+            <string name="distribution" value="ggx"/><float name="alpha" value="0.4"/>
+            <float name="int_ior" value="1.33"/>
+            <rgb name="specular_transmittance" value="0.9, 0.6, 0.3"/>
+        </bsdf>
+    </shape>""",
+    ),
     # A 32 x 32 crop window of a 64 x 48 film: the field of view and aspect are the film's.
     "crop": scene(
         "",

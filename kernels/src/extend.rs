@@ -418,11 +418,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let glossy = m.kind == ROUGH_CONDUCTOR && (front || two_sided);
                 let plastic = m.kind == PLASTIC && (front || two_sided);
                 let rough_plastic = m.kind == ROUGH_PLASTIC && (front || two_sided);
+                let rough_dielectric = m.kind == ROUGH_DIELECTRIC;
+                // The rough dielectric's index ratio across the interface, far side over near.
+                let eta_rd = if front { m.param } else { 1.0 / m.param };
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse || glossy || plastic || rough_plastic)
+                    if (diffuse || glossy || plastic || rough_plastic || rough_dielectric)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -503,6 +506,18 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                         * c
                                         * core::f32::consts::FRAC_1_PI);
                                 pdf_b = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
+                            } else if rough_dielectric {
+                                let e = crate::rough_dielectric::eval(
+                                    -d,
+                                    wi,
+                                    n,
+                                    eta_rd,
+                                    m.conductor_k.x,
+                                    m.flags & BECKMANN != 0,
+                                );
+                                let tint = if e.z > 0.0 { m.color } else { m.transmittance };
+                                fc = tint * e.x;
+                                pdf_b = e.y;
                             } else if rough_plastic {
                                 let fr = crate::sampling::frame(n);
                                 let wo = fr.transpose() * -d;
@@ -532,7 +547,16 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 mis_power(light_pdf, pdf_b * opacity) / light_pdf
                             };
                             ld = thr * fc * le * (weight * opacity);
-                            sh_o = o.extend(tmax);
+                            // A transmitting BSDF's light sample leaves from the far side,
+                            // and stops where it stopped from the near side (short of the
+                            // light, which would otherwise block its own sample).
+                            let mut so = o;
+                            let mut st = tmax;
+                            if wi.dot(ng_n) < 0.0 {
+                                so = offset_origin(p, -ng_n);
+                                st = (o + wi * tmax - so).dot(wi);
+                            }
+                            sh_o = so.extend(st);
                             sh_d = wi;
                         }
                     }
@@ -642,6 +666,38 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         alive = true;
                         bsdf_pdf = e.y;
                         env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
+                    }
+                } else if m.kind == ROUGH_DIELECTRIC {
+                    // Mitsuba `roughdielectric`: a microfacet normal seen from the ray's side,
+                    // then reflection with the Fresnel probability, else refraction. MIS
+                    // weighs what it then meets against light sampling at this vertex.
+                    let beckmann = m.flags & BECKMANN != 0;
+                    let alpha = m.conductor_k.x;
+                    let s = crate::rough_dielectric::sample(
+                        -d,
+                        n,
+                        eta_rd,
+                        alpha,
+                        beckmann,
+                        u,
+                        uniform(key, 4),
+                    );
+                    if s.w > 0.0 {
+                        new_d = s.truncate();
+                        // No 1 / eta² on refraction (as for the smooth dielectric): it
+                        // cancels over a path that enters and leaves, and without it the
+                        // roulette sees Mitsuba's throughput x eta².
+                        let mut tint = m.color;
+                        if new_d.dot(n) <= 0.0 {
+                            tint = m.transmittance;
+                        }
+                        thr = thr * tint * s.w;
+                        alive = true;
+                        let e =
+                            crate::rough_dielectric::eval(-d, new_d, n, eta_rd, alpha, beckmann);
+                        bsdf_pdf = e.y;
+                        env_pdf =
+                            f.env_light * new_d.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;
                     }
                 } else if m.kind == DIELECTRIC {
                     // Dielectric: `param` is int_ior / ext_ior; entering through the front face.

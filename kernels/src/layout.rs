@@ -44,6 +44,9 @@ pub const PLASTIC: u32 = 4;
 /// Mitsuba `roughplastic`: `color` diffuse, `transmittance` specular reflectance, `param`
 /// eta, `conductor_k` (alpha, internal reflectance, 0), `table` its transmittance table.
 pub const ROUGH_PLASTIC: u32 = 5;
+/// Mitsuba `roughdielectric`: `color` specular reflectance, `transmittance` specular
+/// transmittance, `param` eta (int/ext), `conductor_k.x` alpha; `BECKMANN` flag.
+pub const ROUGH_DIELECTRIC: u32 = 6;
 /// `Material::flags` bits.
 pub const TWO_SIDED: u32 = 1;
 pub const EMITTER: u32 = 2;

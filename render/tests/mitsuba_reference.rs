@@ -294,6 +294,11 @@ fn rough_plastic_bsdf_beckmann_ggx_nonlinear_textured() {
 }
 
 #[test]
+fn rough_dielectric_bsdf_ggx() {
+    check("roughdielectric");
+}
+
+#[test]
 fn film_crop_window() {
     check("crop");
 }

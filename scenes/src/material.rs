@@ -44,6 +44,15 @@ pub enum Bsdf {
         specular_reflectance: Vec3,
         nonlinear: bool,
     },
+    /// Mitsuba `roughdielectric`: a rough glass interface (isotropic GGX or Beckmann) of
+    /// relative index `eta` (int/ext) that reflects or refracts off sampled microfacets.
+    RoughDielectric {
+        eta: f32,
+        alpha: f32,
+        distribution: Microfacet,
+        specular_reflectance: Vec3,
+        specular_transmittance: Vec3,
+    },
     /// Mitsuba `roughplastic`: [`Bsdf::Plastic`] with a rough (microfacet) coating: its
     /// glossy reflection, and the base's light through the rough interface, weighted by
     /// the precomputed transmittance table ([`crate::rough_plastic`]) stored as texture
@@ -231,6 +240,24 @@ impl Material {
                     eta,
                 )
             }
+            Bsdf::RoughDielectric {
+                eta,
+                alpha,
+                distribution,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                if distribution == Microfacet::Beckmann {
+                    flags |= GpuMaterial::FLAG_BECKMANN;
+                }
+                conductor_k = Vec3::new(alpha, 0.0, 0.0);
+                (
+                    GpuMaterial::ROUGH_DIELECTRIC,
+                    specular_reflectance,
+                    specular_transmittance,
+                    eta,
+                )
+            }
             Bsdf::RoughPlastic {
                 eta,
                 alpha,
@@ -289,12 +316,12 @@ impl Material {
 /// | offset | field | meaning |
 /// |---|---|---|
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
-/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5 |
+/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
 /// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
-/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); else zero |
+/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); rough dielectric (alpha, 0, 0); else zero |
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
@@ -324,6 +351,7 @@ impl GpuMaterial {
     pub const DIELECTRIC: u32 = 3;
     pub const PLASTIC: u32 = 4;
     pub const ROUGH_PLASTIC: u32 = 5;
+    pub const ROUGH_DIELECTRIC: u32 = 6;
     pub const FLAG_TWO_SIDED: u32 = 1;
     pub const FLAG_EMITTER: u32 = 2;
     pub const FLAG_NONLINEAR: u32 = 4;

@@ -633,8 +633,8 @@ fn unsupported_plugins_strict_and_lenient() {
             "diffuse [0.2, 0.4, 0.6]",
         ),
         (
-            r#"<shape type="rectangle"><bsdf type="roughdielectric"/></shape>"#,
-            "bsdf 'roughdielectric'",
+            r#"<shape type="rectangle"><bsdf type="thindielectric"/></shape>"#,
+            "bsdf 'thindielectric'",
             "smooth dielectric",
         ),
         (r#"<shape type="sdfgrid"/>"#, "shape 'sdfgrid'", "skipped"),

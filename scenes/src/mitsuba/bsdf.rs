@@ -1,5 +1,5 @@
 //! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Supported: diffuse, conductor, roughconductor,
-//! dielectric, plastic, roughplastic, mask, twosided (each parameter read or reported). Other plugins are errors, or under
+//! dielectric, roughdielectric, plastic, roughplastic, mask, twosided (each parameter read or reported). Other plugins are errors, or under
 //! `--lenient` replaced by the nearest supported BSDF with a warning saying which.
 
 use glam::Vec3;
@@ -21,6 +21,7 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "dielectric",
     "plastic",
     "roughplastic",
+    "roughdielectric",
     "twosided",
     "mask",
 ];
@@ -240,6 +241,45 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
             }
         }
         "dielectric" => dielectric(ctx, obj)?,
+        "roughdielectric" => {
+            let distribution = distribution(obj)?;
+            let alpha = alpha(ctx, obj)?;
+            let Bsdf::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } = dielectric(ctx, obj)?
+            else {
+                unreachable!("dielectric() makes a Bsdf::Dielectric")
+            };
+            if int_ior == ext_ior {
+                return Err(syntax(
+                    &obj.loc,
+                    "roughdielectric needs different int_ior and ext_ior (as in Mitsuba)",
+                ));
+            }
+            if alpha == 0.0 {
+                ctx.diag.warn(
+                    obj.loc_of("alpha"),
+                    "roughdielectric with alpha 0 rendered as a smooth dielectric",
+                );
+                Bsdf::Dielectric {
+                    int_ior,
+                    ext_ior,
+                    specular_reflectance,
+                    specular_transmittance,
+                }
+            } else {
+                Bsdf::RoughDielectric {
+                    eta: int_ior / ext_ior,
+                    alpha,
+                    distribution,
+                    specular_reflectance,
+                    specular_transmittance,
+                }
+            }
+        }
         "plastic" => {
             let (b, t) = plastic(ctx, obj)?;
             texture = t;
@@ -439,7 +479,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     if !ctx.diag.lenient {
         // Fail on the plugin itself, before anything its parameters could report.
         let instead = match obj.plugin.as_str() {
-            "roughdielectric" | "thindielectric" | "null" => "replaced by a smooth dielectric",
+            "thindielectric" | "null" => "replaced by a smooth dielectric",
             "bumpmap" | "normalmap" | "blendbsdf" => "replaced by its nested BSDF",
             _ => "replaced by a diffuse BSDF of its colour",
         };
@@ -468,7 +508,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
         ..DEFAULT_BSDF
     };
     let (parsed, instead) = match obj.plugin.as_str() {
-        "roughdielectric" | "thindielectric" => {
+        "thindielectric" => {
             let b = ParsedBsdf {
                 bsdf: dielectric(ctx, obj)?,
                 ..DEFAULT_BSDF
