@@ -325,6 +325,35 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Blends: diffuse and rough gold on a sphere (weight 0.3), and on the cube a diffuse
+    # blended (0.6) with a blend of rough aluminium and a rough plastic (nested second).
+    # Only non-delta BSDFs: Mitsuba's blend mixes a delta BSDF's sampling probability with
+    # the other BSDF's density (blendbsdf.cpp, sample), which Cohort does not reproduce.
+    "blendbsdf": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="blendbsdf">
+            <float name="weight" value="0.3"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.2, 0.2"/></bsdf>
+            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
+        <bsdf type="blendbsdf">
+            <float name="weight" value="0.6"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>
+            <bsdf type="blendbsdf">
+                <float name="weight" value="0.5"/>
+                <bsdf type="roughconductor"><float name="alpha" value="0.3"/><string name="material" value="Al"/></bsdf>
+                <bsdf type="roughplastic"><string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.1, 0.2, 0.7"/></bsdf>
+            </bsdf>
+        </bsdf>
+    </shape>""",
+    ),
     # A 32 x 32 crop window of a 64 x 48 film: the field of view and aspect are the film's.
     "crop": scene(
         "",

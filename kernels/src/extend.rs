@@ -362,7 +362,20 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
             } else {
                 let t = tris[tri as usize];
-                let m = materials[t.material as usize];
+                // Mitsuba `blendbsdf`: one of its BSDFs scatters, the second (`blend`) with
+                // probability `blend_weight`, then alone, for shading, light sampling and MIS
+                // alike: in expectation the blend's weighted sum. A second BSDF that is a
+                // blend itself chooses again.
+                let mut m = materials[t.material as usize];
+                let mut level = 0u32;
+                while level < 4 && m.blend != 0 {
+                    if uniform(key, 10 + level) < m.blend_weight {
+                        m = materials[(m.blend - 1) as usize];
+                        level += 1;
+                    } else {
+                        level = 4;
+                    }
+                }
                 // A hit on a (numerically) degenerate triangle has no normal: shade it as
                 // facing the ray rather than let a NaN normal into the next ray.
                 let cr = (t.v1 - t.v0).cross(t.v2 - t.v0);

@@ -83,7 +83,13 @@ pub struct Material {
     /// Rough plastic: index + 1 of the header of its external transmittance table (a 64 x 1
     /// texture over the incident cosine, `cohort_scenes::rough_plastic`); else 0.
     pub table: u32,
-    pub pad1: u32,
+    /// Mitsuba `blendbsdf`: index + 1 of the material that scatters instead of this one
+    /// with probability `blend_weight` (`extend` picks before shading); 0 for none.
+    pub blend: u32,
+    pub blend_weight: f32,
+    pub pad2: u32,
+    pub pad3: u32,
+    pub pad4: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.

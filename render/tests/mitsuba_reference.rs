@@ -299,6 +299,11 @@ fn rough_dielectric_bsdf_ggx() {
 }
 
 #[test]
+fn blend_bsdf_and_a_nested_blend() {
+    check("blendbsdf");
+}
+
+#[test]
 fn film_crop_window() {
     check("crop");
 }

@@ -169,6 +169,7 @@ fn white_furnace_with_light_sampling() {
         emission: Some(Vec3::splat(le)),
         texture: None,
         mask: None,
+        blend: None,
     });
     b.add_mesh(
         "box",

@@ -56,6 +56,7 @@ fn white_furnace() {
         emission: Some(Vec3::splat(le)),
         texture: None,
         mask: None,
+        blend: None,
     });
     b.add_mesh(
         "box",

@@ -94,6 +94,18 @@ pub struct Material {
     pub texture: Option<u32>,
     /// Mitsuba `mask` around the BSDF: where it is not opaque, paths pass through.
     pub mask: Option<Mask>,
+    /// Mitsuba `blendbsdf`: with probability `weight` the material [`Blend::other`] scatters
+    /// instead of this one (which is the blend's first BSDF).
+    pub blend: Option<Blend>,
+}
+
+/// The second BSDF of a Mitsuba `blendbsdf` and its weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Blend {
+    pub weight: f32,
+    /// Index into [`crate::Scene::materials`] of the second BSDF's material (which carries
+    /// the blend's emission, sidedness and mask too).
+    pub other: u32,
 }
 
 /// Mitsuba `mask`: the surface scatters with probability `opacity` (the luminance of the
@@ -113,6 +125,7 @@ impl Material {
             emission: None,
             texture: None,
             mask: None,
+            blend: None,
         }
     }
 
@@ -134,6 +147,7 @@ impl Material {
             emission: None,
             texture: None,
             mask: None,
+            blend: None,
         }
     }
 
@@ -151,6 +165,7 @@ impl Material {
             emission: None,
             texture: None,
             mask: None,
+            blend: None,
         }
     }
 
@@ -166,6 +181,7 @@ impl Material {
             emission: None,
             texture: None,
             mask: None,
+            blend: None,
         }
     }
 
@@ -305,12 +321,17 @@ impl Material {
             opacity: self.mask.map_or(1.0, |m| m.opacity),
             opacity_texture: 0,
             table: 0,
-            pad1: 0,
+            // Set by `Scene::gpu_materials`, which knows where the other materials are.
+            blend: 0,
+            blend_weight: 0.0,
+            pad2: 0,
+            pad3: 0,
+            pad4: 0,
         }
     }
 }
 
-/// Packed material, 80 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
+/// Packed material, 96 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
 /// 16-byte slot):
 ///
 /// | offset | field | meaning |
@@ -326,7 +347,9 @@ impl Material {
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
 /// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture), else 0 |
-/// | 76 | `pad1: u32` | zero |
+/// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
+/// | 80 | `blend_weight: f32` | that probability |
+/// | 84 | `pad2`, `pad3`, `pad4: u32` | zero |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -341,7 +364,11 @@ pub struct GpuMaterial {
     pub opacity: f32,
     pub opacity_texture: u32,
     pub table: u32,
-    pub pad1: u32,
+    pub blend: u32,
+    pub blend_weight: f32,
+    pub pad2: u32,
+    pub pad3: u32,
+    pub pad4: u32,
 }
 
 impl GpuMaterial {
@@ -359,4 +386,4 @@ impl GpuMaterial {
     pub const FLAG_MASKED: u32 = 16;
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 80);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);

@@ -190,6 +190,10 @@ impl Scene {
                 if let crate::Bsdf::RoughPlastic { table, .. } = m.bsdf {
                     g.table = starts[table as usize] + 1;
                 }
+                if let Some(b) = m.blend {
+                    g.blend = b.other + 1;
+                    g.blend_weight = b.weight;
+                }
                 g
             })
             .collect()

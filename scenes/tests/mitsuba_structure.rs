@@ -950,3 +950,92 @@ fn conductor_materials_and_distributions() {
         assert!(e.contains(needle), "{e}");
     }
 }
+
+/// Mitsuba `blendbsdf`: the first BSDF is the material, the second its own material chosen
+/// with probability `weight` (a nested blend second chooses again; one nested first is
+/// moved second with weight 1 - w); a missing weight or a wrong number of BSDFs is an
+/// error at the blend; a smooth (delta) BSDF in a blend warns.
+#[test]
+fn blend_bsdfs_become_chained_materials() {
+    let diffuse =
+        |r: f32| format!(r#"<bsdf type="diffuse"><rgb name="reflectance" value="{r}"/></bsdf>"#);
+    let xml = |bsdf: String| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><shape type="rectangle">{bsdf}</shape></scene>"#
+        )
+    };
+    let nested = format!(
+        r#"<bsdf type="blendbsdf"><float name="weight" value="0.25"/>{}{}</bsdf>"#,
+        diffuse(0.2),
+        diffuse(0.3)
+    );
+    let outer = format!(
+        r#"<bsdf type="blendbsdf"><float name="weight" value="0.6"/>{nested}{}</bsdf>"#,
+        diffuse(0.1)
+    );
+    let s = cohort_scenes::load_mitsuba_str(&xml(outer), ".")
+        .unwrap()
+        .scene;
+    let m = s.material_of(0);
+    // The nested blend came first: it is moved second, with weight 1 - 0.6.
+    assert_eq!(
+        m.bsdf,
+        cohort_scenes::Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.1)
+        }
+    );
+    let b = m.blend.expect("a blend");
+    assert!((b.weight - 0.4).abs() < 1e-6, "{}", b.weight);
+    let second = &s.materials[b.other as usize];
+    assert_eq!(
+        second.bsdf,
+        cohort_scenes::Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.2)
+        }
+    );
+    let third = second.blend.expect("the nested blend's second");
+    assert_eq!(third.weight, 0.25);
+    assert_eq!(
+        s.materials[third.other as usize].bsdf,
+        cohort_scenes::Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.3)
+        }
+    );
+    let g = s.gpu_materials();
+    let first_gpu = g[s.triangles.materials[0] as usize];
+    assert_eq!(
+        (first_gpu.blend, first_gpu.blend_weight),
+        (b.other + 1, b.weight)
+    );
+
+    let no_weight = format!(
+        r#"<bsdf type="blendbsdf">{}{}</bsdf>"#,
+        diffuse(0.2),
+        diffuse(0.3)
+    );
+    let e = cohort_scenes::load_mitsuba_str(&xml(no_weight), ".")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("blendbsdf needs a 'weight'"), "{e}");
+    let one = format!(
+        r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/>{}</bsdf>"#,
+        diffuse(0.2)
+    );
+    let e = cohort_scenes::load_mitsuba_str(&xml(one), ".")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("exactly two nested BSDFs, not 1"), "{e}");
+    let delta = format!(
+        r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/>{}<bsdf type="conductor"/></bsdf>"#,
+        diffuse(0.2)
+    );
+    let loaded = cohort_scenes::load_mitsuba_str(&xml(delta), ".").unwrap();
+    assert!(
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("smooth (delta) BSDF")),
+        "{:?}",
+        loaded.warnings
+    );
+}

@@ -24,6 +24,7 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "roughdielectric",
     "twosided",
     "mask",
+    "blendbsdf",
 ];
 
 /// A BSDF as the shape will use it.
@@ -35,6 +36,8 @@ pub(crate) struct ParsedBsdf {
     pub texture: Option<u32>,
     /// Mitsuba `mask` around it (`Material::mask`).
     pub mask: Option<Mask>,
+    /// Mitsuba `blendbsdf`: its weight and, in `Ctx::blend_parts`, its second BSDF.
+    pub blend: Option<(f32, u32)>,
 }
 
 /// Mitsuba's default BSDF for shapes that name none.
@@ -45,6 +48,7 @@ pub(crate) const DEFAULT_BSDF: ParsedBsdf = ParsedBsdf {
     two_sided: false,
     texture: None,
     mask: None,
+    blend: None,
 };
 
 /// Mitsuba's named indices of refraction (`src/render/ior.h`).
@@ -292,6 +296,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         }
         "twosided" => return twosided(ctx, obj),
         "mask" => return mask(ctx, obj),
+        "blendbsdf" => return blend(ctx, obj),
         _ => return stand_in(ctx, obj),
     };
     obj.finish(&mut ctx.diag)?;
@@ -300,6 +305,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         two_sided: false,
         texture,
         mask: None,
+        blend: None,
     })
 }
 
@@ -473,6 +479,71 @@ fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     })
 }
 
+/// Mitsuba `blendbsdf`: two nested BSDFs, the second scattering with probability `weight`
+/// (a number, required as in Mitsuba). The first becomes the material; the second is kept in
+/// `Ctx::blend_parts` for the shape to register. A blend nested first is moved second
+/// (weight 1 - w); two nested blends are refused.
+fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    if obj.has("weight") && obj.float("weight").is_err() {
+        return Err(syntax(
+            obj.loc_of("weight"),
+            "blendbsdf weight must be a number (textured weights are not supported)",
+        ));
+    }
+    let Some(weight) = obj.float("weight")? else {
+        return Err(syntax(
+            &obj.loc,
+            "blendbsdf needs a 'weight' (as in Mitsuba)",
+        ));
+    };
+    if !(0.0..=1.0).contains(&weight) {
+        return Err(syntax(
+            obj.loc_of("weight"),
+            "blendbsdf weight must be in [0, 1]",
+        ));
+    }
+    let inner = nested_bsdfs(ctx, obj)?;
+    let [first, second] = inner.as_slice() else {
+        return Err(syntax(
+            &obj.loc,
+            format!(
+                "blendbsdf needs exactly two nested BSDFs, not {}",
+                inner.len()
+            ),
+        ));
+    };
+    let (first, second, weight) = match (first.blend, second.blend) {
+        (Some(_), Some(_)) => {
+            return Err(syntax(
+                &obj.loc,
+                "a blendbsdf of two blendbsdfs is not supported; nest one of them only",
+            ))
+        }
+        (Some(_), None) => (*second, *first, 1.0 - weight),
+        _ => (*first, *second, weight),
+    };
+    let delta = |b: &ParsedBsdf| {
+        matches!(
+            b.bsdf,
+            Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::Plastic { .. }
+        )
+    };
+    if delta(&first) || delta(&second) {
+        ctx.diag.warn(
+            &obj.loc,
+            "blendbsdf of a smooth (delta) BSDF: rendered as the exact weighted sum, which \
+             Mitsuba's image differs from (its blend mixes the delta BSDF's sampling \
+             probability with the other BSDF's density)",
+        );
+    }
+    obj.finish(&mut ctx.diag)?;
+    ctx.blend_parts.push(second);
+    Ok(ParsedBsdf {
+        blend: Some((weight, (ctx.blend_parts.len() - 1) as u32)),
+        ..first
+    })
+}
+
 /// A plugin the renderer does not implement: an error, or (lenient) the nearest supported BSDF.
 fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let what = plugins::describe("bsdf", &obj.plugin);
@@ -480,7 +551,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
         // Fail on the plugin itself, before anything its parameters could report.
         let instead = match obj.plugin.as_str() {
             "thindielectric" | "null" => "replaced by a smooth dielectric",
-            "bumpmap" | "normalmap" | "blendbsdf" => "replaced by its nested BSDF",
+            "bumpmap" | "normalmap" => "replaced by its nested BSDF",
             _ => "replaced by a diffuse BSDF of its colour",
         };
         ctx.diag.unsupported(&obj.loc, &what, instead)?;
@@ -528,7 +599,7 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
             "replaced by an index-matched dielectric (invisible to paths, but it blocks light samples)"
                 .to_string(),
         ),
-        "bumpmap" | "normalmap" | "blendbsdf" => match nested(ctx)? {
+        "bumpmap" | "normalmap" => match nested(ctx)? {
             Some(b) => (b, "replaced by its (first) nested BSDF".to_string()),
             None => (DEFAULT_BSDF, "replaced by diffuse 0.5".to_string()),
         },

@@ -119,6 +119,8 @@ pub(crate) struct Ctx<'a> {
     pub search: Vec<PathBuf>,
     /// Parsed BSDFs by object address.
     pub bsdfs: HashMap<usize, ParsedBsdf>,
+    /// Second BSDFs of `blendbsdf`s (`ParsedBsdf::blend`).
+    pub blend_parts: Vec<ParsedBsdf>,
     /// Area emitters already attached to a shape, by object address.
     pub attached: Vec<usize>,
     /// The scene's textures, and their index by object address.
@@ -270,6 +272,7 @@ fn build(mut diag: Diag, doc: &xml::Document) -> Result<(Scene, Vec<Warning>), S
         ids,
         search: doc.search.clone(),
         bsdfs: HashMap::new(),
+        blend_parts: Vec::new(),
         attached: Vec::new(),
         textures: Vec::new(),
         texture_ids: HashMap::new(),

@@ -296,12 +296,7 @@ fn add_placed<'a>(
     obj.finish(&mut ctx.diag)?;
 
     // Mitsuba's default BSDF is diffuse 0.5, but black on a shape that emits.
-    let ParsedBsdf {
-        bsdf,
-        two_sided,
-        texture,
-        mask,
-    } = match (bsdf, emission) {
+    let parsed = match (bsdf, emission) {
         (Some(b), _) => b,
         (None, Some(_)) => ParsedBsdf {
             bsdf: crate::material::Bsdf::Diffuse {
@@ -311,13 +306,7 @@ fn add_placed<'a>(
         },
         (None, None) => DEFAULT_BSDF,
     };
-    let material = builder.material(Material {
-        bsdf,
-        two_sided,
-        emission,
-        texture,
-        mask,
-    });
+    let material = register_material(ctx, builder, parsed, emission);
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));
     let added = builder.add_mesh(&name, &mesh, &to_world, material, shading);
@@ -396,4 +385,34 @@ fn open_cylinder() -> TriMesh {
 fn lathe_z(profile: &[Vec2]) -> TriMesh {
     let y_to_z = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
     shapes::lathe(profile, ROUND_SEGMENTS).transformed(&y_to_z)
+}
+
+/// The material of a parsed BSDF on a shape with `emission`, registered with the builder;
+/// a `blendbsdf`'s second BSDF first, as its own material with the blend's emission,
+/// sidedness and mask (whichever BSDF scatters, the surface is the same).
+fn register_material(
+    ctx: &Ctx,
+    builder: &mut SceneBuilder,
+    parsed: ParsedBsdf,
+    emission: Option<Vec3>,
+) -> u32 {
+    let blend = parsed.blend.map(|(weight, part)| {
+        let other = ParsedBsdf {
+            two_sided: parsed.two_sided || ctx.blend_parts[part as usize].two_sided,
+            mask: parsed.mask.or(ctx.blend_parts[part as usize].mask),
+            ..ctx.blend_parts[part as usize]
+        };
+        crate::material::Blend {
+            weight,
+            other: register_material(ctx, builder, other, emission),
+        }
+    });
+    builder.material(Material {
+        bsdf: parsed.bsdf,
+        two_sided: parsed.two_sided,
+        emission,
+        texture: parsed.texture,
+        mask: parsed.mask,
+        blend,
+    })
 }
