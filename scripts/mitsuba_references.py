@@ -88,11 +88,12 @@ def sensor(plugin, params, film=SQUARE_FILM, rfilter=BOX_FILTER):
 PERSPECTIVE = sensor("perspective", ['<float name="fov" value="45"/>', LOOK_AT_BOX])
 
 
-def scene(integrator, body, camera=PERSPECTIVE):
+def scene(integrator, body, camera=PERSPECTIVE, box=True):
+    """A scene of `body` (in the open box unless `box` is false) seen by `camera`."""
     return f"""<scene version="3.0.0">
     <integrator type="path">{integrator}</integrator>
     {camera}
-{BOX}{body}
+{BOX if box else ""}{body}
 </scene>
 """
 
@@ -125,6 +126,26 @@ def write_png(path):
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "wb") as f:
         f.write(png)
+
+
+def write_sky_exr(path):
+    """A 48 x 24 latitude-longitude OpenEXR sky: a blue-to-white gradient above the horizon, a
+    brown ground below it, and a small bright sun (2 x 2 texels, radiance 60) 30 degrees up,
+    so that importance sampling of the map matters."""
+    import mitsuba as mi
+
+    w, h = 48, 24
+    img = np.zeros((h, w, 3), dtype=np.float32)
+    for y in range(h):
+        t = y / (h - 1)  # colatitude / pi
+        if t < 0.5:
+            img[y, :] = (0.3 + 1.0 * t, 0.5 + 0.8 * t, 1.2 - 0.4 * t)
+        else:
+            img[y, :] = (0.25, 0.18, 0.1)
+        img[y, :, 0] *= 1.0 + 0.3 * np.sin(np.arange(w) * 2 * np.pi / w)
+    img[7:9, 30:32] = (60.0, 55.0, 45.0)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB).write(path)
 
 
 def write_textured_obj(path):
@@ -563,6 +584,50 @@ SCENES = {
     </shape>""",
     ),
     # No ceiling: sunlight falls into the box from above.
+    # An open scene lit only by an OpenEXR environment map (textures/sky.exr, see
+    # write_sky_exr), turned and scaled: a diffuse and a rough gold sphere on a ground, the sky
+    # seen behind them.
+    "envmap": scene(
+        "",
+        """<emitter type="envmap">
+        <string name="filename" value="textures/sky.exr"/>
+        <float name="scale" value="0.8"/>
+        <transform name="to_world"><rotate y="1" angle="60"/></transform>
+    </emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.5, 0.45, 0"/><float name="radius" value="0.45"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.55, 0.4, 0.2"/><float name="radius" value="0.4"/>
+        <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.15"/><string name="material" value="Au"/></bsdf>
+    </shape>""",
+        camera=sensor(
+            "perspective",
+            [
+                '<float name="fov" value="50"/>',
+                '<transform name="to_world"><lookat origin="0, 1.1, 3.2" target="0, 0.5, 0" up="0, 1, 0"/></transform>',
+            ],
+        ),
+        box=False,
+    ),
+    # The box lit by a point light and, through its open front, by an 8-bit sRGB PNG as the
+    # environment (textures/stripes.png), tilted: the light choice between the two, and
+    # the decoding of the PNG.
+    "envmap_png": scene(
+        "",
+        CEILING
+        + '<emitter type="point"><point name="position" value="-0.2, 1.5, 0.1"/>'
+        + '<rgb name="intensity" value="1.5, 1.2, 1"/></emitter>'
+        + """<emitter type="envmap">
+        <string name="filename" value="textures/stripes.png"/>
+        <transform name="to_world"><rotate x="1" angle="30"/></transform>
+    </emitter>""",
+    ),
     "directional": scene(
         "",
         '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'
@@ -613,6 +678,7 @@ def main():
     write_serialized(os.path.join(OUT, "meshes", "shapes.serialized"))
     write_textured_obj(os.path.join(OUT, "meshes", "textured_quad.obj"))
     write_png(os.path.join(OUT, "textures", "stripes.png"))
+    write_sky_exr(os.path.join(OUT, "textures", "sky.exr"))
     for name in names:
         xml = SCENES[name]
         with open(os.path.join(OUT, f"{name}.xml"), "w") as f:

@@ -7,6 +7,7 @@
 //! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
+use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::integrator::Integrator;
 use crate::layout::*;
 use crate::light::{
@@ -358,7 +359,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                 }
                 if !hidden {
-                    l += thr * f.environment * w;
+                    l += thr * environment_radiance(f, textures, d) * w;
                 }
             } else {
                 let t = tris[tri as usize];
@@ -458,10 +459,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         let mut delta_select = 0.0f32;
                         let mut tmax = 3.0e38f32;
                         if ul < f.env_light {
-                            wi = crate::sampling::frame(n) * crate::sampling::cosine_hemisphere(up);
-                            light_pdf =
-                                f.env_light * wi.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;
-                            le = f.environment;
+                            let s = environment_sample(f, textures, n, up);
+                            wi = s.truncate();
+                            light_pdf = f.env_light * s.w;
+                            le = environment_radiance(f, textures, wi);
                         } else {
                             let id = pick_light(
                                 lights,
@@ -594,7 +595,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // group's random patch), so any weights that sum to one stay unbiased.
                     let c = new_d.dot(n).max(0.0);
                     bsdf_pdf = c * core::f32::consts::FRAC_1_PI;
-                    env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
+                    env_pdf = environment_pdf(f, textures, n, new_d);
                 } else if plastic {
                     // Mitsuba `plastic`: the coating's specular reflection or the base's
                     // diffuse scattering, chosen by their Fresnel-weighted mean albedos.
@@ -613,7 +614,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * base * ((1.0 - f_i) * (1.0 - f_o) / (1.0 - p_spec) * s.w);
                         // As for diffuse bounces: cosine densities whatever S drew.
                         bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
-                        env_pdf = f.env_light * c * core::f32::consts::FRAC_1_PI;
+                        env_pdf = environment_pdf(f, textures, n, new_d);
                     }
                     alive = true;
                 } else if rough_plastic {
@@ -652,7 +653,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * weight;
                         alive = true;
                         bsdf_pdf = e.w;
-                        env_pdf = f.env_light * wi.z * core::f32::consts::FRAC_1_PI;
+                        env_pdf = environment_pdf(f, textures, n, new_d);
                     }
                 } else if m.kind == CONDUCTOR && (front || two_sided) {
                     let cos_i = -d.dot(n);
@@ -678,7 +679,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * albedo * fresnel * (e.x / e.y);
                         alive = true;
                         bsdf_pdf = e.y;
-                        env_pdf = f.env_light * wi.z.max(0.0) * core::f32::consts::FRAC_1_PI;
+                        env_pdf = environment_pdf(f, textures, n, new_d);
                     }
                 } else if m.kind == ROUGH_DIELECTRIC {
                     // Mitsuba `roughdielectric`: a microfacet normal seen from the ray's side,
@@ -709,8 +710,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         let e =
                             crate::rough_dielectric::eval(-d, new_d, n, eta_rd, alpha, beckmann);
                         bsdf_pdf = e.y;
-                        env_pdf =
-                            f.env_light * new_d.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;
+                        env_pdf = environment_pdf(f, textures, n, new_d);
                     }
                 } else if m.kind == DIELECTRIC {
                     // Dielectric: `param` is int_ior / ext_ior; entering through the front face.

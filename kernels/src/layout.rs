@@ -175,6 +175,12 @@ pub struct Frame {
     /// `film_filter` (`cohort_scenes::FilmFilter::table`); 0: the box filter, each camera
     /// ray uniform in its own pixel.
     pub filter_radius: f32,
+    /// Mitsuba `envmap`: where the map starts in the textures array, plus one
+    /// (`cohort_kernels::environment`); 0: the environment is the constant `environment`.
+    pub env_map: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`

@@ -17,6 +17,7 @@
 
 pub mod compact;
 pub mod copy;
+pub mod environment;
 pub mod extend;
 pub mod integrator;
 pub mod layout;

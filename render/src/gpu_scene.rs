@@ -20,6 +20,8 @@ pub struct GpuScene {
     pub tex_coords: GpuBuffer<glam::Vec4>,
     /// Every texture (`cohort_scenes::Scene::gpu_textures`), or one zero element.
     pub textures: GpuBuffer<glam::Vec4>,
+    /// Where the environment map starts in `textures`, plus one (0: none).
+    pub env_map: u32,
     pub triangle_count: usize,
     /// Next-event estimation's alias table over the emitter triangles (`crate::lights`).
     pub lights: GpuBuffer<LightEntry>,
@@ -115,6 +117,7 @@ impl GpuScene {
         Ok(GpuScene {
             tex_coords: upload(device, &tex_coords)?,
             textures: upload(device, &textures)?,
+            env_map: scene.gpu_environment_map(),
             nodes: upload(device, nodes)?,
             triangles: upload(device, &tris)?,
             materials: upload(device, mats)?,

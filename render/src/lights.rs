@@ -1,7 +1,7 @@
 //! The emitters of a scene as next-event estimation samples them: an alias table over the
 //! emitter triangles (in BVH leaf order) and the delta lights (point, spot, directional),
-//! each chosen in proportion to its power, and the probability of sampling the constant
-//! environment instead (half the samples when there are other lights).
+//! each chosen in proportion to its power, and the probability of sampling the
+//! environment (constant or map) instead (half the samples when there are other lights).
 //!
 //! Powers are estimates that only steer the choice (any positive choice probabilities
 //! keep the estimator unbiased): a one-sided Lambertian emitter of radiance L and area A
@@ -141,7 +141,11 @@ pub fn build(scene: &Scene, tris: &mut [Triangle]) -> LightTable {
     // interior, walls block most of it, and sampling it by that power starves the lights
     // that do reach the surfaces (measured on the hide_emitters test scene: the variance
     // rose above Mitsuba's, which picks each emitter with the same probability).
-    let has_env = luminance(scene.environment) > 0.0;
+    let has_env = luminance(scene.environment) > 0.0
+        || scene
+            .environment_map
+            .as_ref()
+            .is_some_and(|m| !m.is_black());
     let env_light = match (has_env, power.is_empty()) {
         (false, _) => 0.0,
         (true, true) => 1.0,
@@ -180,31 +184,19 @@ pub fn build(scene: &Scene, tris: &mut [Triangle]) -> LightTable {
     }
 }
 
-/// Vose's alias method over `(light id, probability)` pairs whose probabilities sum to 1.
+/// The alias table (`cohort_scenes::alias`) over `(light id, probability)` pairs.
 fn alias_table(items: &[(u32, f64)]) -> Vec<LightEntry> {
-    let n = items.len();
-    let mut scaled: Vec<f64> = items.iter().map(|&(_, p)| p * n as f64).collect();
-    let mut entries: Vec<LightEntry> = items
-        .iter()
-        .map(|&(k, _)| LightEntry {
+    let weights: Vec<f64> = items.iter().map(|&(_, p)| p).collect();
+    cohort_scenes::alias::alias_table(&weights)
+        .into_iter()
+        .zip(items)
+        .map(|(e, &(k, _))| LightEntry {
             tri: k,
-            alias_tri: k,
-            prob: 1.0,
+            alias_tri: items[e.alias as usize].0,
+            prob: e.prob,
             pad: 0,
         })
-        .collect();
-    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
-    while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
-        entries[s].prob = scaled[s] as f32;
-        entries[s].alias_tri = items[l].0;
-        scaled[l] -= 1.0 - scaled[s];
-        if scaled[l] < 1.0 {
-            large.pop();
-            small.push(l);
-        }
-    }
-    // What is left is 1 up to rounding.
-    entries
+        .collect()
 }
 
 #[cfg(test)]

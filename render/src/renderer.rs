@@ -438,6 +438,7 @@ impl<'d> Renderer<'d> {
             iteration: 0,
             light_count: gpu.light_count,
             env_light: gpu.env_light,
+            env_map: gpu.env_map,
             ..Default::default()
         };
         apply_options(&mut frame, &opts);

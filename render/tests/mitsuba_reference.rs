@@ -376,3 +376,23 @@ fn mask_constant_and_textured_opacity() {
 fn textured_conductor_reflectance() {
     check("conductor_texture");
 }
+
+#[test]
+fn environment_map_exr_turned_and_scaled() {
+    check("envmap");
+}
+
+#[test]
+fn environment_map_png_with_a_point_light() {
+    check("envmap_png");
+}
+
+/// The map's directions matter at this budget: its mean radiance as a constant environment
+/// fails the test.
+#[test]
+fn environment_map_replaced_by_its_mean_fails() {
+    assert_fails("envmap", |scene| {
+        let map = scene.environment_map.take().unwrap();
+        scene.environment = map.mean_radiance();
+    });
+}

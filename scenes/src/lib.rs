@@ -13,10 +13,12 @@
 //! ```
 //! `morton.rs` gives the pixel order the renderer lays its rays out in.
 
+pub mod alias;
 pub mod builder;
 pub mod bvh;
 pub mod camera;
 pub mod embedded;
+pub mod environment_map;
 pub mod error;
 pub mod film_filter;
 mod image_bmp;
@@ -41,6 +43,7 @@ pub use bvh::{
 };
 pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhError};
 pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
+pub use environment_map::EnvironmentMap;
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use film_filter::{FilmFilter, FilterKind};
 pub use material::{Bsdf, GpuMaterial, Mask, Material};

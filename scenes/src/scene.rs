@@ -130,6 +130,9 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Radiance of rays that leave the scene (Mitsuba `constant` emitter); black when absent.
     pub environment: Vec3,
+    /// Mitsuba `envmap`: radiance of rays that leave the scene by direction (in place of
+    /// `environment`, which is then black).
+    pub environment_map: Option<crate::EnvironmentMap>,
     /// Point, spot and directional lights (Mitsuba emitters that are not shapes).
     pub lights: Vec<Light>,
     pub integrator: Integrator,
@@ -165,6 +168,7 @@ impl Scene {
             materials: Vec::new(),
             objects: Vec::new(),
             environment: Vec3::ZERO,
+            environment_map: None,
             lights: Vec::new(),
             integrator: Integrator::default(),
             sample_count: 1,
@@ -199,9 +203,22 @@ impl Scene {
             .collect()
     }
 
-    /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`).
+    /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`), then
+    /// the environment map's (`EnvironmentMap::gpu_layout`), if any.
     pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
-        crate::texture::gpu_textures(&self.textures).0
+        let mut data = crate::texture::gpu_textures(&self.textures).0;
+        if let Some(map) = &self.environment_map {
+            data.extend(map.gpu_layout());
+        }
+        data
+    }
+
+    /// Where the environment map starts in [`Scene::gpu_textures`], plus one (0: no map).
+    pub fn gpu_environment_map(&self) -> u32 {
+        match &self.environment_map {
+            Some(_) => crate::texture::gpu_textures_len(&self.textures) + 1,
+            None => 0,
+        }
     }
 
     pub fn material_of(&self, triangle: usize) -> &Material {
@@ -232,7 +249,7 @@ impl Scene {
                 .count(),
             emissive_triangles,
             emissive_area,
-            has_environment: self.environment != Vec3::ZERO,
+            has_environment: self.environment != Vec3::ZERO || self.environment_map.is_some(),
             has_vertex_normals: self.triangles.normals.is_some(),
             bounds_min,
             bounds_max,

@@ -169,14 +169,24 @@ pub fn gpu_texture_starts(textures: &[Texture]) -> Vec<u32> {
         .iter()
         .map(|t| {
             let start = at;
-            at += HEADER_LEN as u32
-                + match t {
-                    Texture::Bitmap { texels, .. } => texels.len() as u32,
-                    Texture::Checkerboard { .. } => 0,
-                };
+            at += gpu_len(t);
             start
         })
         .collect()
+}
+
+/// Entries of [`gpu_textures`]' array.
+pub fn gpu_textures_len(textures: &[Texture]) -> u32 {
+    textures.iter().map(gpu_len).sum()
+}
+
+/// Entries texture `t` takes in [`gpu_textures`]' array.
+fn gpu_len(t: &Texture) -> u32 {
+    HEADER_LEN as u32
+        + match t {
+            Texture::Bitmap { texels, .. } => texels.len() as u32,
+            Texture::Checkerboard { .. } => 0,
+        }
 }
 
 /// Every texture of a scene in the kernels' layout, and where each one's header starts.

@@ -271,7 +271,7 @@ fn unsupported_features_warn_with_file_and_line() {
     <shape type="rectangle">
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
     </shape>
-    <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>
+    <emitter type="sunsky"/>
     <shape type="rectangle"><bsdf type="roughconductor"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
     <wibble/>"#,
     );
@@ -299,7 +299,7 @@ fn unsupported_features_warn_with_file_and_line() {
     warned_at(r#"type="sdfgrid""#, "shape 'sdfgrid' is not supported");
     warned_at(r#"type="principled""#, "bsdf 'principled' is not supported");
     warned_at("roughness", "'roughness'");
-    warned_at("envmap", "emitter 'envmap' is not supported");
+    warned_at("sunsky", "emitter 'sunsky' is not supported");
     warned_at("roughconductor", "anisotropic");
     warned_at("<wibble/>", "<wibble>");
     // The stand-in for principled keeps its colour.

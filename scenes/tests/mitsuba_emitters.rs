@@ -84,3 +84,51 @@ fn directional_light_direction() {
     )
     .is_err());
 }
+
+/// Mitsuba `envmap`: the image decoded (an 8-bit PNG is sRGB), times `scale`, under
+/// `to_world`; a second environment emitter is refused, or added under `--lenient`.
+#[test]
+fn envmap_reads_image_scale_and_transform() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../render/tests/scenes/mitsuba/textures");
+    let image = cohort_scenes::image_file::read_image(&dir.join("stripes.png"), false).unwrap();
+    let envmap = r#"<emitter type="envmap"><string name="filename" value="stripes.png"/><float name="scale" value="2"/><transform name="to_world"><rotate y="1" angle="90"/></transform></emitter>"#;
+    let xml = |body: &str| format!("<scene version=\"3.0.0\">\n{body}\n</scene>");
+    let scene = load_mitsuba_str(&xml(envmap), &dir).unwrap().scene;
+    let map = scene.environment_map.expect("an environment map");
+    assert_eq!((map.width, map.height), (image.width, image.height));
+    for (got, want) in map.texels.iter().zip(&image.texels) {
+        assert!((*got - *want * 2.0).abs().max_element() < 1e-6);
+    }
+    assert!((map.to_world * Vec3::Z - Vec3::X).length() < 1e-6);
+    assert_eq!(scene.environment, Vec3::ZERO);
+
+    let constant =
+        r#"<emitter type="constant"><rgb name="radiance" value="0.5, 0.25, 1"/></emitter>"#;
+    let both = xml(&format!("{constant}\n{envmap}"));
+    let e = load_mitsuba_str(&both, &dir).unwrap_err().to_string();
+    assert!(
+        e.contains("a second environment emitter") && e.contains(":3:"),
+        "{e}"
+    );
+    let lenient = cohort_scenes::LoadOptions {
+        lenient: true,
+        ..Default::default()
+    };
+    let l = cohort_scenes::load_mitsuba_str_with(&both, &dir, &lenient).unwrap();
+    let map = l.scene.environment_map.unwrap();
+    let want = image.texels[0] * 2.0 + Vec3::new(0.5, 0.25, 1.0);
+    assert!((map.texels[0] - want).abs().max_element() < 1e-6);
+
+    let e = load_mitsuba_str(&xml(r#"<emitter type="envmap"/>"#), &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("needs a 'filename'") && e.contains(":2:"), "{e}");
+    let e = load_mitsuba_str(
+        &xml(r#"<emitter type="envmap"><string name="filename" value="nowhere.exr"/></emitter>"#),
+        &dir,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("nowhere.exr"), "{e}");
+}

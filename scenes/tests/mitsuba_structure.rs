@@ -622,11 +622,7 @@ fn unsupported_plugins_strict_and_lenient() {
             "emitter 'projector'",
             "skipped",
         ),
-        (
-            r#"<emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>"#,
-            "emitter 'envmap'",
-            "skipped",
-        ),
+        (r#"<emitter type="sunsky"/>"#, "emitter 'sunsky'", "skipped"),
         (
             r#"<shape type="rectangle"><bsdf type="principled"><rgb name="base_color" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
             "bsdf 'principled'",

@@ -1,5 +1,5 @@
-//! Mitsuba emitters that are not attached to a shape: `constant` (the environment), `point`,
-//! `spot` and `directional`, read with Mitsuba 3.9's parameters and defaults. (`area` emitters
+//! Mitsuba emitters that are not attached to a shape: `constant` and `envmap` (the
+//! environment), `point`, `spot` and `directional`, read with Mitsuba 3.9's parameters and defaults. (`area` emitters
 //! are read where their shape is, in `shape.rs`.)
 
 use glam::{Mat4, Vec3};
@@ -7,14 +7,39 @@ use glam::{Mat4, Vec3};
 use super::diag::syntax;
 use super::props::Obj;
 use super::{plugins, Ctx};
+use crate::environment_map::EnvironmentMap;
 use crate::error::SceneError;
+use crate::image_file::read_image;
 use crate::scene::Light;
 
 /// What a top-level `<emitter>` adds to the scene.
 pub(crate) struct Emitters {
     /// Constant environment radiance (Mitsuba `constant`).
     pub environment: Option<Vec3>,
+    /// Mitsuba `envmap` (with a `constant` given too, under `--lenient`, the constant is
+    /// added to its texels).
+    pub environment_map: Option<EnvironmentMap>,
     pub lights: Vec<Light>,
+}
+
+impl Emitters {
+    /// The environment of the scene: a map (with any constant radiance added to it), or the
+    /// constant radiance alone.
+    pub fn into_environment(self) -> (Vec3, Option<EnvironmentMap>) {
+        let constant = self.environment.unwrap_or(Vec3::ZERO);
+        match self.environment_map {
+            Some(mut map) => {
+                map.texels.iter_mut().for_each(|t| *t += constant);
+                (Vec3::ZERO, Some(map))
+            }
+            None => (constant, None),
+        }
+    }
+
+    /// Whether an environment emitter has been read already.
+    fn has_environment(&self) -> bool {
+        self.environment.is_some() || self.environment_map.is_some()
+    }
 }
 
 /// Reads one top-level `<emitter>` into `out`.
@@ -27,16 +52,30 @@ pub(crate) fn emitter<'a>(
         "constant" => {
             let radiance = spectrum(ctx, obj, "radiance")?;
             obj.finish(&mut ctx.diag)?;
-            match &mut out.environment {
-                Some(first) => {
-                    ctx.diag.unsupported(
-                        &obj.loc,
-                        "a second environment emitter (Mitsuba allows one per scene)",
-                        "added to the first",
-                    )?;
-                    *first += radiance;
-                }
-                None => out.environment = Some(radiance),
+            if out.has_environment() {
+                ctx.diag.unsupported(
+                    &obj.loc,
+                    "a second environment emitter (Mitsuba allows one per scene)",
+                    "added to the first",
+                )?;
+            }
+            *out.environment.get_or_insert(Vec3::ZERO) += radiance;
+        }
+        "envmap" => {
+            let map = environment_map(ctx, obj)?;
+            if out.has_environment() {
+                ctx.diag.unsupported(
+                    &obj.loc,
+                    "a second environment emitter (Mitsuba allows one per scene)",
+                    if out.environment_map.is_some() {
+                        "skipped"
+                    } else {
+                        "the constant radiance is added to the map"
+                    },
+                )?;
+            }
+            if out.environment_map.is_none() {
+                out.environment_map = Some(map);
             }
         }
         "point" => {
@@ -122,6 +161,55 @@ pub(crate) fn emitter<'a>(
             .unsupported(&obj.loc, plugins::describe("emitter", other), "skipped")?,
     }
     Ok(())
+}
+
+/// Mitsuba `envmap`: `filename` (any image a `bitmap` texture reads, sRGB-decoded where
+/// the format is), `scale`, `to_world` (its linear part, which must be invertible);
+/// `mis_compensation` only changes how Mitsuba samples the map, not the image.
+fn environment_map<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<EnvironmentMap, SceneError> {
+    let Some(filename) = obj.string("filename")? else {
+        return Err(syntax(&obj.loc, "emitter 'envmap' needs a 'filename'"));
+    };
+    let at = obj.loc_of("filename").clone();
+    let path = super::shape::find_file(ctx, "image", &filename, &at)?;
+    let scale = obj.float("scale")?.unwrap_or(1.0);
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(syntax(
+            obj.loc_of("scale"),
+            format!("emitter 'envmap': scale {scale} must be finite and >= 0"),
+        ));
+    }
+    let to_world = glam::Mat3::from_mat4(obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY));
+    if !(to_world.determinant() != 0.0 && to_world.is_finite()) {
+        return Err(syntax(
+            obj.loc_of("to_world"),
+            "emitter 'envmap': to_world is singular",
+        ));
+    }
+    obj.ignore("mis_compensation");
+    obj.finish(&mut ctx.diag)?;
+    let image = read_image(&path, false)
+        .map_err(|e| syntax(&at, format!("image '{}': {e}", path.display())))?;
+    if let Some(bad) = image
+        .texels
+        .iter()
+        .find(|t| !t.is_finite() || t.min_element() < 0.0)
+    {
+        return Err(syntax(
+            &at,
+            format!(
+                "image '{}': emitter 'envmap' needs finite radiance >= 0, found {bad}",
+                path.display()
+            ),
+        ));
+    }
+    Ok(EnvironmentMap::new(
+        image.width,
+        image.height,
+        &image.texels,
+        scale,
+        to_world,
+    ))
 }
 
 /// Mitsuba's rule for `point` (`position`) and `directional` (`direction`): the vector

@@ -285,6 +285,7 @@ fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> 
     let mut camera: Option<(Camera, u32)> = None;
     let mut emitters = emitter::Emitters {
         environment: None,
+        environment_map: None,
         lights: Vec::new(),
     };
     let mut integrator: Option<Integrator> = None;
@@ -346,8 +347,8 @@ fn interpret<'a>(ctx: &mut Ctx<'a>, root: &'a Obj) -> Result<Scene, SceneError> 
     let scene = builder.scene_mut();
     scene.textures = std::mem::take(&mut ctx.textures);
     scene.camera = camera;
-    scene.environment = emitters.environment.unwrap_or(Vec3::ZERO);
-    scene.lights = emitters.lights;
+    scene.lights = std::mem::take(&mut emitters.lights);
+    (scene.environment, scene.environment_map) = emitters.into_environment();
     scene.integrator = integrator;
     scene.sample_count = sample_count;
     Ok(builder.finish())
