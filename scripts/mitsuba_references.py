@@ -128,6 +128,56 @@ def write_png(path):
         f.write(png)
 
 
+def write_png_pixels(path, w, h, pixel, grey=False):
+    """An 8-bit PNG (no imaging library) of `w` x `h` pixels, `pixel(x, y)` giving values in
+    [0, 1]: one (grey) or three (RGB) of them."""
+    import struct
+    import zlib
+
+    rows = b""
+    for y in range(h):
+        row = bytearray([0])  # filter type: none
+        for x in range(w):
+            v = pixel(x, y)
+            v = [v] if grey else list(v)
+            row += bytes(int(round(255 * min(max(c, 0.0), 1.0))) for c in v)
+        rows += bytes(row)
+
+    def chunk(kind, data):
+        c = struct.pack(">I", len(data)) + kind + data
+        return c + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    png = b"\x89PNG\r\n\x1a\n"
+    png += chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0 if grey else 2, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(rows))
+    png += chunk(b"IEND", b"")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(png)
+
+
+def write_normal_map(path):
+    """A 32 x 32 tangent-space normal map (RGB = (n + 1) / 2) of waves along u and v."""
+
+    def normal(x, y):
+        n = np.array([0.6 * np.cos(2 * np.pi * x / 8), 0.6 * np.sin(2 * np.pi * y / 8), 1.0])
+        n /= np.linalg.norm(n)
+        return (n + 1) / 2
+
+    write_png_pixels(path, 32, 32, normal)
+
+
+def write_height_map(path):
+    """A 32 x 32 grey height field of bumps, for `bumpmap`."""
+    write_png_pixels(
+        path,
+        32,
+        32,
+        lambda x, y: 0.5 + 0.5 * np.sin(2 * np.pi * x / 16) * np.cos(2 * np.pi * y / 16),
+        grey=True,
+    )
+
+
 def write_sky_exr(path):
     """A 48 x 24 latitude-longitude OpenEXR sky: a blue-to-white gradient above the horizon, a
     brown ground below it, and a small bright sun (2 x 2 texels, radiance 60) 30 degrees up,
@@ -628,6 +678,53 @@ SCENES = {
         <transform name="to_world"><rotate x="1" angle="30"/></transform>
     </emitter>""",
     ),
+    # Normal maps (textures/waves_normal.png, see write_normal_map, raw): on a diffuse panel,
+    # a rough gold sphere, and a two-sided panel seen from its back (flip_normals), under the
+    # area light.
+    "normalmap": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<texture type="bitmap" id="waves"><string name="filename" value="textures/waves_normal.png"/><boolean name="raw" value="true"/></texture>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.45" y="0.6"/><translate x="-0.45" y="0.8" z="-0.9"/></transform>
+        <bsdf type="normalmap"><ref name="normalmap" id="waves"/><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.6, 0.4"/></bsdf></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.4, 1.3, -0.2"/><float name="radius" value="0.3"/>
+        <bsdf type="normalmap"><ref name="normalmap" id="waves"/>
+            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <boolean name="flip_normals" value="true"/>
+        <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="-30"/><translate x="-0.3" y="0.35" z="0.3"/></transform>
+        <bsdf type="twosided"><bsdf type="normalmap"><ref name="normalmap" id="waves"/><bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.5, 0.7"/></bsdf></bsdf></bsdf>
+    </shape>""",
+    ),
+    # Bump maps (textures/bumps_height.png, see write_height_map, raw) with their scale: on
+    # a rough plastic panel and a diffuse sphere.
+    "bumpmap": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="rectangle">
+        <transform name="to_world"><scale x="0.5" y="0.6"/><translate x="-0.4" y="0.8" z="-0.9"/></transform>
+        <bsdf type="bumpmap">
+            <texture type="bitmap"><string name="filename" value="textures/bumps_height.png"/><boolean name="raw" value="true"/></texture>
+            <float name="scale" value="0.1"/>
+            <bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.15"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.45, 0.35, 0.2"/><float name="radius" value="0.3"/>
+        <bsdf type="bumpmap">
+            <texture type="bitmap"><string name="filename" value="textures/bumps_height.png"/><boolean name="raw" value="true"/></texture>
+            <float name="scale" value="0.05"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.3"/></bsdf>
+        </bsdf>
+    </shape>""",
+    ),
     "directional": scene(
         "",
         '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'
@@ -679,6 +776,8 @@ def main():
     write_textured_obj(os.path.join(OUT, "meshes", "textured_quad.obj"))
     write_png(os.path.join(OUT, "textures", "stripes.png"))
     write_sky_exr(os.path.join(OUT, "textures", "sky.exr"))
+    write_normal_map(os.path.join(OUT, "textures", "waves_normal.png"))
+    write_height_map(os.path.join(OUT, "textures", "bumps_height.png"))
     for name in names:
         xml = SCENES[name]
         with open(os.path.join(OUT, f"{name}.xml"), "w") as f:

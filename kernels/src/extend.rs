@@ -15,6 +15,7 @@ use crate::light::{
     shared_light_draw, triangle_point,
 };
 use crate::path_end::PathEnd;
+use crate::perturb::{perturb_normal, perturb_weight};
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
@@ -388,9 +389,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // Shading happens in the frame of the interpolated vertex normal, as in
                 // Mitsuba (sidedness included); new rays leave along the geometric normal.
                 let ns = shading_normal(f, shading_normals, t.original, h, ng);
-                let front = ns.dot(d) < 0.0;
+                let mut front = ns.dot(d) < 0.0;
                 let two_sided = m.flags & TWO_SIDED != 0;
-                let n = if front { ns } else { -ns };
+                let mut n = if front { ns } else { -ns };
                 // The geometric normal on the side the shading normal faces.
                 let ng_n = if ng.dot(n) >= 0.0 { ng } else { -ng };
                 let p = ray_o[r].truncate() + d * h.x;
@@ -408,8 +409,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // The material's colour (diffuse, plastic base, conductor reflectance), or its
                 // texture's here.
                 let mut uv = Vec2::ZERO;
-                if m.texture != 0 || m.opacity_texture != 0 {
+                if m.texture != 0 || m.opacity_texture != 0 || m.perturb_texture != 0 {
                     uv = hit_uv(tex_coords, t.original, h);
+                }
+                // Mitsuba `normalmap` / `bumpmap`: the BSDF shades around the perturbed
+                // normal `np`; `base` is the shading normal of the side the map applies on,
+                // against which each direction is weighed (`perturb_weight`). Emission
+                // above stays with the unperturbed surface.
+                let perturbed = m.perturb_texture != 0;
+                let shadowing = m.flags & NO_SHADOWING == 0;
+                let mut base = ns;
+                let mut np = ns;
+                if perturbed {
+                    let pn = perturb_normal(
+                        m, textures, tex_coords, t.original, t, uv, ns, ng, -d, front,
+                    );
+                    np = pn.truncate();
+                    base = ns * pn.w;
+                    front = np.dot(d) < 0.0;
+                    n = if front { np } else { -np };
                 }
                 let mut albedo = m.color;
                 if m.texture != 0 {
@@ -554,13 +572,23 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     * e.x;
                                 pdf_b = e.y;
                             }
+                            // A normal or bump map weighs the direction (and zeroes its
+                            // density where it lies on different sides of the frames).
+                            let mut pw = 1.0f32;
+                            if perturbed {
+                                pw = perturb_weight(base, np, wi, shadowing);
+                            }
+                            let mut pdf_scatter = pdf_b * opacity;
+                            if pw == 0.0 {
+                                pdf_scatter = 0.0;
+                            }
                             // A mask scatters only its opacity's share, and samples it so.
                             let weight = if delta_select > 0.0 {
                                 1.0 / delta_select
                             } else {
-                                mis_power(light_pdf, pdf_b * opacity) / light_pdf
+                                mis_power(light_pdf, pdf_scatter) / light_pdf
                             };
-                            ld = thr * fc * le * (weight * opacity);
+                            ld = thr * fc * le * (weight * opacity * pw);
                             // A transmitting BSDF's light sample leaves from the far side,
                             // and stops where it stopped from the near side (short of the
                             // light, which would otherwise block its own sample).
@@ -727,6 +755,15 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * m.transmittance;
                     }
                     alive = true;
+                }
+                // A normal or bump map weighs the sampled direction as it weighs light
+                // samples (Mitsuba's `sample`: zero on different sides of the frames).
+                if perturbed && alive && !pass_through && !masked_through {
+                    let pw = perturb_weight(base, np, new_d, shadowing);
+                    thr *= pw;
+                    if pw == 0.0 {
+                        alive = false;
+                    }
                 }
                 // The BSDF densities for MIS are the mask's: its opacity times the nested
                 // BSDF's (1 without a mask).

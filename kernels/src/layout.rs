@@ -56,6 +56,13 @@ pub const NONLINEAR: u32 = 4;
 pub const BECKMANN: u32 = 8;
 /// `Material::flags`: Mitsuba `mask` around the BSDF (`Material::opacity`).
 pub const MASKED: u32 = 16;
+/// `Material::flags`: Mitsuba `normalmap` / `bumpmap` around the BSDF (`perturb_texture`;
+/// `cohort_kernels::perturb`), and their options.
+pub const NORMAL_MAP: u32 = 32;
+pub const BUMP_MAP: u32 = 64;
+pub const NO_SHADOWING: u32 = 128;
+pub const NO_FLIP: u32 = 256;
+pub const PERTURB_PER_SIDE: u32 = 512;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
@@ -87,8 +94,10 @@ pub struct Material {
     /// with probability `blend_weight` (`extend` picks before shading); 0 for none.
     pub blend: u32,
     pub blend_weight: f32,
-    pub pad2: u32,
-    pub pad3: u32,
+    /// Normal or bump map: index + 1 of the header of its texture; else 0.
+    pub perturb_texture: u32,
+    /// Bump map: Mitsuba's `scale` of the height's gradient.
+    pub bump_scale: f32,
     pub pad4: u32,
 }
 

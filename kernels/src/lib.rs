@@ -23,6 +23,7 @@ pub mod integrator;
 pub mod layout;
 pub mod light;
 pub mod path_end;
+pub mod perturb;
 pub mod rng;
 pub mod rough_dielectric;
 pub mod rough_plastic;

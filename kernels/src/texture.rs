@@ -51,14 +51,33 @@ pub fn texel(textures: &[Vec4], base: u32, w: i32, h: i32, x: i32, y: i32, flags
     textures[(base + i as u32) as usize].truncate()
 }
 
+/// The point of the texture's own domain (in [0, 1)^2 per repetition) for texture
+/// coordinates `uv`: its `to_uv` applied.
+#[kernel_fn]
+pub fn texture_point(textures: &[Vec4], header: u32, uv: Vec2) -> Vec2 {
+    let m = textures[(header + 1) as usize];
+    let o = textures[(header + 2) as usize];
+    Vec2::new(m.x * uv.x + m.z * uv.y + o.x, m.y * uv.x + m.w * uv.y + o.y)
+}
+
+/// The bilinear lookup's cell at point `p` of a `w` x `h` bitmap: the texel (x, y) whose
+/// centre is at or before `p` in each axis (as f32) and the fractions towards the next
+/// (z, w).
+#[kernel_fn]
+pub fn bilinear_cell(p: Vec2, w: i32, h: i32) -> Vec4 {
+    let x = p.x * w as f32 - 0.5;
+    let y = p.y * h as f32 - 0.5;
+    let x0 = x.floor();
+    let y0 = y.floor();
+    Vec4::new(x0, y0, x - x0, y - y0)
+}
+
 /// The colour of the texture whose header starts at `header` at texture coordinates `uv`,
 /// as `cohort_scenes::Texture::eval` (and Mitsuba) compute it.
 #[kernel_fn]
 pub fn texture_eval(textures: &[Vec4], header: u32, uv: Vec2) -> Vec3 {
     let h0 = textures[header as usize];
-    let m = textures[(header + 1) as usize];
-    let o = textures[(header + 2) as usize];
-    let p = Vec2::new(m.x * uv.x + m.z * uv.y + o.x, m.y * uv.x + m.w * uv.y + o.y);
+    let p = texture_point(textures, header, uv);
     let flags = h0.w.to_bits();
     let mut c = textures[(header + 4) as usize].truncate();
     if h0.x.to_bits() == TEXTURE_BITMAP {
@@ -70,14 +89,11 @@ pub fn texture_eval(textures: &[Vec4], header: u32, uv: Vec2) -> Vec3 {
             let y = (p.y * h as f32).floor() as i32;
             c = texel(textures, base, w, h, x, y, flags);
         } else {
-            let x = p.x * w as f32 - 0.5;
-            let y = p.y * h as f32 - 0.5;
-            let x0 = x.floor();
-            let y0 = y.floor();
-            let fx = x - x0;
-            let fy = y - y0;
-            let xi = x0 as i32;
-            let yi = y0 as i32;
+            let cell = bilinear_cell(p, w, h);
+            let xi = cell.x as i32;
+            let yi = cell.y as i32;
+            let fx = cell.z;
+            let fy = cell.w;
             let top = texel(textures, base, w, h, xi, yi, flags) * (1.0 - fx)
                 + texel(textures, base, w, h, xi + 1, yi, flags) * fx;
             let bottom = texel(textures, base, w, h, xi, yi + 1, flags) * (1.0 - fx)
@@ -100,4 +116,39 @@ pub fn texture_eval(textures: &[Vec4], header: u32, uv: Vec2) -> Vec3 {
 #[kernel_fn]
 pub fn luminance(c: Vec3) -> f32 {
     c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169
+}
+
+/// Gradient in (u, v) of the luminance of the texture whose header starts at `header`, at
+/// texture coordinates `uv`: Mitsuba's `eval_1_grad` of a bilinear `bitmap` (the partials of
+/// the bilinear interpolation across the texel cell, through `to_uv` and times the
+/// resolution exactly as Mitsuba multiplies them); zero for a nearest-filtered bitmap and
+/// for a checkerboard.
+#[kernel_fn]
+pub fn texture_gradient(textures: &[Vec4], header: u32, uv: Vec2) -> Vec2 {
+    let h0 = textures[header as usize];
+    let m = textures[(header + 1) as usize];
+    let p = texture_point(textures, header, uv);
+    let flags = h0.w.to_bits();
+    let mut g = Vec2::ZERO;
+    if h0.x.to_bits() == TEXTURE_BITMAP && flags & FILTER_NEAREST == 0 {
+        let w = h0.y.to_bits() as i32;
+        let h = h0.z.to_bits() as i32;
+        let base = header + TEXTURE_HEADER;
+        let cell = bilinear_cell(p, w, h);
+        let xi = cell.x as i32;
+        let yi = cell.y as i32;
+        let fx = cell.z;
+        let fy = cell.w;
+        let f00 = luminance(texel(textures, base, w, h, xi, yi, flags));
+        let f10 = luminance(texel(textures, base, w, h, xi + 1, yi, flags));
+        let f01 = luminance(texel(textures, base, w, h, xi, yi + 1, flags));
+        let f11 = luminance(texel(textures, base, w, h, xi + 1, yi + 1, flags));
+        let dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
+        let dy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10);
+        g = Vec2::new(
+            w as f32 * (m.x * dx + m.y * dy),
+            h as f32 * (m.z * dx + m.w * dy),
+        );
+    }
+    g
 }

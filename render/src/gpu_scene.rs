@@ -84,10 +84,11 @@ impl GpuScene {
             .map(|n| n.extend(0.0))
             .collect();
         // Texture coordinates only matter where a material reads a texture.
-        let textured = scene
-            .materials
-            .iter()
-            .any(|m| m.texture.is_some() || m.mask.is_some_and(|k| k.texture.is_some()));
+        let textured = scene.materials.iter().any(|m| {
+            m.texture.is_some()
+                || m.mask.is_some_and(|k| k.texture.is_some())
+                || m.perturb.is_some()
+        });
         let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
             (Some(uvs), true) => uvs
                 .chunks_exact(3)

@@ -396,3 +396,24 @@ fn environment_map_replaced_by_its_mean_fails() {
         scene.environment = map.mean_radiance();
     });
 }
+
+#[test]
+fn normal_maps_on_diffuse_conductor_and_a_two_sided_back() {
+    check("normalmap");
+}
+
+#[test]
+fn bump_maps_with_their_scale() {
+    check("bumpmap");
+}
+
+/// The perturbation matters at this budget: the bump-mapped scene without its bump maps
+/// fails the test.
+#[test]
+fn bump_maps_removed_fail() {
+    assert_fails("bumpmap", |scene| {
+        for m in &mut scene.materials {
+            m.perturb = None;
+        }
+    });
+}

@@ -170,6 +170,7 @@ fn white_furnace_with_light_sampling() {
         texture: None,
         mask: None,
         blend: None,
+        perturb: None,
     });
     b.add_mesh(
         "box",

@@ -57,6 +57,7 @@ fn white_furnace() {
         texture: None,
         mask: None,
         blend: None,
+        perturb: None,
     });
     b.add_mesh(
         "box",

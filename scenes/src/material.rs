@@ -97,6 +97,35 @@ pub struct Material {
     /// Mitsuba `blendbsdf`: with probability `weight` the material [`Blend::other`] scatters
     /// instead of this one (which is the blend's first BSDF).
     pub blend: Option<Blend>,
+    /// Mitsuba `normalmap` or `bumpmap` around the BSDF.
+    pub perturb: Option<Perturb>,
+}
+
+/// Mitsuba `normalmap` / `bumpmap`: the BSDF shades in a frame whose normal a texture
+/// perturbs (`cohort_kernels::perturb`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Perturb {
+    pub kind: PerturbKind,
+    /// Index into [`crate::Scene::textures`]: the normal map (RGB = (n + 1) / 2 in the
+    /// shading frame), or the height whose luminance's gradient bumps the surface.
+    pub texture: u32,
+    /// Mitsuba's `use_shadowing_function` (default true): Estevez et al.'s shadowing term.
+    pub shadowing: bool,
+    /// Mitsuba's `flip_invalid_normals` (default true): a perturbed normal facing away from
+    /// the viewer is mirrored about the shading normal.
+    pub flip_invalid: bool,
+    /// A `twosided` around the map: on the back side the map applies in the shading frame
+    /// mirrored to that side, as Mitsuba's `twosided` evaluates its nested BSDF.
+    pub per_side: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PerturbKind {
+    Normal,
+    /// Mitsuba's `scale` multiplies the height's gradient.
+    Bump {
+        scale: f32,
+    },
 }
 
 /// The second BSDF of a Mitsuba `blendbsdf` and its weight.
@@ -126,6 +155,7 @@ impl Material {
             texture: None,
             mask: None,
             blend: None,
+            perturb: None,
         }
     }
 
@@ -148,6 +178,7 @@ impl Material {
             texture: None,
             mask: None,
             blend: None,
+            perturb: None,
         }
     }
 
@@ -166,6 +197,7 @@ impl Material {
             texture: None,
             mask: None,
             blend: None,
+            perturb: None,
         }
     }
 
@@ -182,6 +214,7 @@ impl Material {
             texture: None,
             mask: None,
             blend: None,
+            perturb: None,
         }
     }
 
@@ -308,6 +341,25 @@ impl Material {
         if self.mask.is_some() {
             flags |= GpuMaterial::FLAG_MASKED;
         }
+        let mut bump_scale = 0.0;
+        if let Some(p) = self.perturb {
+            flags |= match p.kind {
+                PerturbKind::Normal => GpuMaterial::FLAG_NORMAL_MAP,
+                PerturbKind::Bump { scale } => {
+                    bump_scale = scale;
+                    GpuMaterial::FLAG_BUMP_MAP
+                }
+            };
+            if !p.shadowing {
+                flags |= GpuMaterial::FLAG_NO_SHADOWING;
+            }
+            if !p.flip_invalid {
+                flags |= GpuMaterial::FLAG_NO_FLIP;
+            }
+            if p.per_side {
+                flags |= GpuMaterial::FLAG_PERTURB_PER_SIDE;
+            }
+        }
         GpuMaterial {
             color: color.to_array(),
             kind,
@@ -324,8 +376,9 @@ impl Material {
             // Set by `Scene::gpu_materials`, which knows where the other materials are.
             blend: 0,
             blend_weight: 0.0,
-            pad2: 0,
-            pad3: 0,
+            // Set by `Scene::gpu_materials`.
+            perturb_texture: 0,
+            bump_scale,
             pad4: 0,
         }
     }
@@ -339,7 +392,7 @@ impl Material {
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
 /// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked, bit 5 normal map, bit 6 bump map, bit 7 no shadowing term, bit 8 no flip of invalid normals, bit 9 perturbation per side (`Perturb`) |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
 /// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); rough dielectric (alpha, 0, 0); else zero |
@@ -349,7 +402,9 @@ impl Material {
 /// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture), else 0 |
 /// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
 /// | 80 | `blend_weight: f32` | that probability |
-/// | 84 | `pad2`, `pad3`, `pad4: u32` | zero |
+/// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
+/// | 88 | `bump_scale: f32` | bump map: Mitsuba's `scale` |
+/// | 92 | `pad4: u32` | zero |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -366,8 +421,8 @@ pub struct GpuMaterial {
     pub table: u32,
     pub blend: u32,
     pub blend_weight: f32,
-    pub pad2: u32,
-    pub pad3: u32,
+    pub perturb_texture: u32,
+    pub bump_scale: f32,
     pub pad4: u32,
 }
 
@@ -384,6 +439,11 @@ impl GpuMaterial {
     pub const FLAG_NONLINEAR: u32 = 4;
     pub const FLAG_BECKMANN: u32 = 8;
     pub const FLAG_MASKED: u32 = 16;
+    pub const FLAG_NORMAL_MAP: u32 = 32;
+    pub const FLAG_BUMP_MAP: u32 = 64;
+    pub const FLAG_NO_SHADOWING: u32 = 128;
+    pub const FLAG_NO_FLIP: u32 = 256;
+    pub const FLAG_PERTURB_PER_SIDE: u32 = 512;
 }
 
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);

@@ -323,3 +323,73 @@ fn masks_are_read_as_mitsuba_reads_them() {
         assert!(e.contains(needle), "{e}");
     }
 }
+
+/// `normalmap` and `bumpmap` wrap one BSDF with their texture and options; a `twosided`
+/// around the map applies it per side; malformed ones are located errors.
+#[test]
+fn normal_and_bump_maps_are_read_as_mitsuba_reads_them() {
+    use cohort_scenes::{Bsdf, PerturbKind};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../render/tests/scenes/mitsuba/textures");
+    let load = |bsdf: &str| {
+        load_mitsuba_str(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n{bsdf}\n</shape>\n</scene>"
+            ),
+            &dir,
+        )
+    };
+    let s = load(r#"<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="stripes.png"/><boolean name="raw" value="true"/></texture><bsdf type="diffuse"/></bsdf>"#)
+        .unwrap()
+        .scene;
+    let m = s.materials[0];
+    let p = m.perturb.expect("a normal map");
+    assert_eq!(p.kind, PerturbKind::Normal);
+    assert!(p.shadowing && p.flip_invalid && !p.per_side);
+    assert!(matches!(
+        s.textures[p.texture as usize],
+        Texture::Bitmap { .. }
+    ));
+    assert!(matches!(m.bsdf, Bsdf::Diffuse { .. }));
+
+    let s = load(r#"<bsdf type="twosided"><bsdf type="bumpmap"><float name="scale" value="0.25"/><boolean name="use_shadowing_function" value="false"/><texture type="bitmap"><string name="filename" value="stripes.png"/></texture><bsdf type="roughplastic"/></bsdf></bsdf>"#)
+        .unwrap()
+        .scene;
+    let m = s.materials[0];
+    let p = m.perturb.expect("a bump map");
+    assert_eq!(p.kind, PerturbKind::Bump { scale: 0.25 });
+    assert!(!p.shadowing && p.per_side && m.two_sided);
+    assert!(matches!(m.bsdf, Bsdf::RoughPlastic { .. }));
+
+    // A constant normal is a one-colour texture.
+    let s = load(r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/><bsdf type="diffuse"/></bsdf>"#)
+        .unwrap()
+        .scene;
+    let p = s.materials[0].perturb.unwrap();
+    assert_eq!(
+        s.textures[p.texture as usize].eval(Vec2::new(0.3, 0.7)),
+        Vec3::new(0.5, 0.5, 1.0)
+    );
+
+    for (bsdf, message) in [
+        (
+            r#"<bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf>"#,
+            "needs a nested <texture>",
+        ),
+        (
+            r#"<bsdf type="bumpmap"><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>"#,
+            "no gradient for 'checkerboard'",
+        ),
+        (
+            r#"<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>"#,
+            "needs a 'normalmap'",
+        ),
+        (
+            r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/></bsdf>"#,
+            "needs a nested <bsdf>",
+        ),
+    ] {
+        let e = load(bsdf).unwrap_err().to_string();
+        assert!(e.contains(message) && e.contains(":3"), "{bsdf}: {e}");
+    }
+}

@@ -1,11 +1,12 @@
 //! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Supported: diffuse, conductor, roughconductor,
-//! dielectric, roughdielectric, plastic, roughplastic, mask, twosided (each parameter read or reported). Other plugins are errors, or under
+//! dielectric, roughdielectric, plastic, roughplastic, mask, twosided, blendbsdf, normalmap,
+//! bumpmap (each parameter read or reported). Other plugins are errors, or under
 //! `--lenient` replaced by the nearest supported BSDF with a warning saying which.
 
 use glam::Vec3;
 
 use crate::error::SceneError;
-use crate::material::{Bsdf, Mask, Microfacet, PERFECT_CONDUCTOR};
+use crate::material::{Bsdf, Mask, Microfacet, Perturb, PerturbKind, PERFECT_CONDUCTOR};
 
 use super::conductor_iors::CONDUCTOR_IORS;
 use super::diag::syntax;
@@ -25,6 +26,8 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "twosided",
     "mask",
     "blendbsdf",
+    "normalmap",
+    "bumpmap",
 ];
 
 /// A BSDF as the shape will use it.
@@ -38,6 +41,8 @@ pub(crate) struct ParsedBsdf {
     pub mask: Option<Mask>,
     /// Mitsuba `blendbsdf`: its weight and, in `Ctx::blend_parts`, its second BSDF.
     pub blend: Option<(f32, u32)>,
+    /// Mitsuba `normalmap` / `bumpmap` around it (`Material::perturb`).
+    pub perturb: Option<Perturb>,
 }
 
 /// Mitsuba's default BSDF for shapes that name none.
@@ -49,6 +54,7 @@ pub(crate) const DEFAULT_BSDF: ParsedBsdf = ParsedBsdf {
     texture: None,
     mask: None,
     blend: None,
+    perturb: None,
 };
 
 /// Mitsuba's named indices of refraction (`src/render/ior.h`).
@@ -297,6 +303,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         "twosided" => return twosided(ctx, obj),
         "mask" => return mask(ctx, obj),
         "blendbsdf" => return blend(ctx, obj),
+        "normalmap" | "bumpmap" => return perturb(ctx, obj),
         _ => return stand_in(ctx, obj),
     };
     obj.finish(&mut ctx.diag)?;
@@ -306,6 +313,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         texture,
         mask: None,
         blend: None,
+        perturb: None,
     })
 }
 
@@ -413,6 +421,23 @@ fn nested_bsdfs<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Vec<ParsedBsdf>, 
     Ok(inner)
 }
 
+/// The one BSDF nested in (or referenced by) a wrapper that takes exactly one (`mask`,
+/// `normalmap`, `bumpmap`).
+fn single_nested<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let plugin = &obj.plugin;
+    match nested_bsdfs(ctx, obj)?.as_slice() {
+        [nested] => Ok(*nested),
+        [] => Err(syntax(
+            &obj.loc,
+            format!("{plugin} needs a nested <bsdf> (or a <ref> to one)"),
+        )),
+        _ => Err(syntax(
+            &obj.loc,
+            format!("{plugin} takes one nested BSDF (as Mitsuba)"),
+        )),
+    }
+}
+
 fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let inner = nested_bsdfs(ctx, obj)?;
     if inner
@@ -446,6 +471,11 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
     obj.finish(&mut ctx.diag)?;
     Ok(ParsedBsdf {
         two_sided: true,
+        // Mitsuba's twosided hands the back side to the map as if it were the front.
+        perturb: front.perturb.map(|p| Perturb {
+            per_side: true,
+            ..p
+        }),
         ..front
     })
 }
@@ -453,17 +483,7 @@ fn twosided<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
 /// Mitsuba `mask`: one nested BSDF and its `opacity` (a number, colour or texture, whose
 /// luminance counts; default 0.5).
 fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
-    let inner = nested_bsdfs(ctx, obj)?;
-    let nested = match inner.as_slice() {
-        [nested] => *nested,
-        [] => {
-            return Err(syntax(
-                &obj.loc,
-                "mask needs a nested <bsdf> (or a <ref> to one)",
-            ))
-        }
-        _ => return Err(syntax(&obj.loc, "mask takes one nested BSDF (as Mitsuba)")),
-    };
+    let nested = single_nested(ctx, obj)?;
     if nested.mask.is_some() {
         return Err(syntax(&obj.loc, "a mask inside a mask is not supported"));
     }
@@ -544,6 +564,82 @@ fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> 
     })
 }
 
+/// Mitsuba `normalmap` (the texture `normalmap`: RGB = (n + 1) / 2 in the shading frame) or
+/// `bumpmap` (a nested texture whose luminance is a height, times `scale`) around one nested
+/// BSDF; `flip_invalid_normals`, `use_shadowing_function`.
+fn perturb<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
+    let plugin = obj.plugin.as_str();
+    let mut texture = None;
+    if plugin == "bumpmap" {
+        for c in &obj.children {
+            let t = ctx.target(c)?;
+            if t.tag != "texture" {
+                continue;
+            }
+            if texture.is_some() {
+                return Err(syntax(&t.loc, "bumpmap takes one texture (as in Mitsuba)"));
+            }
+            if t.plugin != "bitmap" {
+                return Err(syntax(
+                    &t.loc,
+                    format!(
+                        "bumpmap needs a 'bitmap' height texture (Mitsuba has no gradient for '{}')",
+                        t.plugin
+                    ),
+                ));
+            }
+            c.take();
+            texture = Some(super::texture::texture_index(ctx, t)?);
+        }
+    } else {
+        let Some((colour, t)) = ctx.color_or_texture(obj, "normalmap")? else {
+            return Err(syntax(&obj.loc, "normalmap needs a 'normalmap' texture"));
+        };
+        // A constant normal: a texture of one colour.
+        texture = Some(t.unwrap_or_else(|| {
+            ctx.textures.push(crate::texture::Texture::Checkerboard {
+                color0: colour,
+                color1: colour,
+                to_uv: crate::texture::UvTransform::IDENTITY,
+            });
+            (ctx.textures.len() - 1) as u32
+        }));
+    }
+    let Some(texture) = texture else {
+        return Err(syntax(
+            &obj.loc,
+            "bumpmap needs a nested <texture> (its height)",
+        ));
+    };
+    let kind = if plugin == "bumpmap" {
+        PerturbKind::Bump {
+            scale: obj.float("scale")?.unwrap_or(1.0),
+        }
+    } else {
+        PerturbKind::Normal
+    };
+    let shadowing = obj.boolean("use_shadowing_function")?.unwrap_or(true);
+    let flip_invalid = obj.boolean("flip_invalid_normals")?.unwrap_or(true);
+    let nested = single_nested(ctx, obj)?;
+    if nested.perturb.is_some() {
+        return Err(syntax(
+            &obj.loc,
+            "a normalmap or bumpmap inside another is not supported",
+        ));
+    }
+    obj.finish(&mut ctx.diag)?;
+    Ok(ParsedBsdf {
+        perturb: Some(Perturb {
+            kind,
+            texture,
+            shadowing,
+            flip_invalid,
+            per_side: false,
+        }),
+        ..nested
+    })
+}
+
 /// A plugin the renderer does not implement: an error, or (lenient) the nearest supported BSDF.
 fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let what = plugins::describe("bsdf", &obj.plugin);
@@ -551,7 +647,6 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
         // Fail on the plugin itself, before anything its parameters could report.
         let instead = match obj.plugin.as_str() {
             "thindielectric" | "null" => "replaced by a smooth dielectric",
-            "bumpmap" | "normalmap" => "replaced by its nested BSDF",
             _ => "replaced by a diffuse BSDF of its colour",
         };
         ctx.diag.unsupported(&obj.loc, &what, instead)?;
@@ -564,15 +659,6 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
             }
         }
         Ok(Vec3::splat(default))
-    };
-    let nested = |ctx: &mut Ctx<'a>| -> Result<Option<ParsedBsdf>, SceneError> {
-        for c in &obj.children {
-            let t = ctx.target(c)?;
-            if t.tag == "bsdf" {
-                return parse_bsdf(ctx, t).map(Some);
-            }
-        }
-        Ok(None)
     };
     let diffuse = |reflectance: Vec3| ParsedBsdf {
         bsdf: Bsdf::Diffuse { reflectance },
@@ -599,10 +685,6 @@ fn stand_in<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneErro
             "replaced by an index-matched dielectric (invisible to paths, but it blocks light samples)"
                 .to_string(),
         ),
-        "bumpmap" | "normalmap" => match nested(ctx)? {
-            Some(b) => (b, "replaced by its (first) nested BSDF".to_string()),
-            None => (DEFAULT_BSDF, "replaced by diffuse 0.5".to_string()),
-        },
         _ => {
             let r = colour(
                 ctx,

@@ -400,6 +400,7 @@ fn register_material(
         let other = ParsedBsdf {
             two_sided: parsed.two_sided || ctx.blend_parts[part as usize].two_sided,
             mask: parsed.mask.or(ctx.blend_parts[part as usize].mask),
+            perturb: parsed.perturb.or(ctx.blend_parts[part as usize].perturb),
             ..ctx.blend_parts[part as usize]
         };
         crate::material::Blend {
@@ -414,5 +415,6 @@ fn register_material(
         texture: parsed.texture,
         mask: parsed.mask,
         blend,
+        perturb: parsed.perturb,
     })
 }
