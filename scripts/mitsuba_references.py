@@ -725,6 +725,29 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # A projector throwing textures/stripes.png (16 x 12: its aspect shapes the beam) onto
+    # the back wall and the cube, with a scale and a field of view along y.
+    "projector": scene(
+        "",
+        CEILING
+        + """<emitter type="projector">
+        <transform name="to_world"><lookat origin="0.2, 1.5, 0.9" target="0, 0.8, -1" up="0, 1, 0"/></transform>
+        <texture type="bitmap" name="irradiance"><string name="filename" value="textures/stripes.png"/></texture>
+        <float name="scale" value="2.5"/>
+        <float name="fov" value="30"/><string name="fov_axis" value="y"/>
+    </emitter>""",
+    ),
+    # A spot whose beam is coloured by textures/stripes.png.
+    "spot_texture": scene(
+        "",
+        CEILING
+        + """<emitter type="spot">
+        <transform name="to_world"><lookat origin="-0.2, 1.9, 0.3" target="0.1, 0, -0.5" up="0, 0, 1"/></transform>
+        <rgb name="intensity" value="9, 8, 7"/>
+        <float name="cutoff_angle" value="40"/><float name="beam_width" value="30"/>
+        <texture type="bitmap" name="texture"><string name="filename" value="textures/stripes.png"/></texture>
+    </emitter>""",
+    ),
     "directional": scene(
         "",
         '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'

@@ -492,7 +492,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 let dd = delta_light_direction(delta_lights, k, o);
                                 if dd.w > 0.0 {
                                     wi = dd.truncate();
-                                    le = delta_light_arrival(delta_lights, k, wi, dd.w);
+                                    le = delta_light_arrival(delta_lights, textures, k, wi, dd.w);
                                     delta_select = delta_lights[k as usize].select;
                                     tmax = dd.w * (1.0 - 1e-4);
                                 }

@@ -213,9 +213,12 @@ pub const DELTA_LIGHT: u32 = 0x8000_0000;
 pub const POINT_LIGHT: u32 = 0;
 pub const SPOT_LIGHT: u32 = 1;
 pub const DIRECTIONAL_LIGHT: u32 = 2;
+/// Mitsuba `projector`: `intensity` is its irradiance times `scale` (times `texture` where
+/// given), `direction` the unnormalised image axis `to_world` (0, 0, 1).
+pub const PROJECTOR_LIGHT: u32 = 3;
 
-/// A light no ray can hit (Mitsuba `point`, `spot`, `directional`), reached only by
-/// next-event estimation.
+/// A light no ray can hit (Mitsuba `point`, `spot`, `directional`, `projector`), reached
+/// only by next-event estimation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
 pub struct DeltaLight {
@@ -226,8 +229,9 @@ pub struct DeltaLight {
     pub intensity: Vec3,
     /// Probability that next-event estimation picks this light.
     pub select: f32,
-    /// Spot: rows of the inverse of the linear part of `to_world` (world -> the spot's
-    /// frame, whose +z is the axis), so that the falloff sees directions as Mitsuba does.
+    /// Spot and projector: rows of the inverse of the linear part of `to_world` (world ->
+    /// the light's frame, whose +z is the axis), so that directions are seen as Mitsuba
+    /// sees them.
     pub to_local_x: Vec3,
     /// Spot: cosine of the cutoff angle (no light outside it).
     pub cos_cutoff: f32,
@@ -237,10 +241,18 @@ pub struct DeltaLight {
     pub to_local_z: Vec3,
     /// Spot: the cutoff angle in radians.
     pub cutoff: f32,
-    /// Directional: the direction the light travels (unit).
+    /// Directional: the direction the light travels (unit); projector: `to_world` (0, 0, 1).
     pub direction: Vec3,
     /// Spot: 1 / (cutoff - beam width) in 1/radians (0 for a hard-edged spot).
     pub inv_transition: f32,
+    /// Spot and projector: index + 1 of the header of the texture that colours the light
+    /// (`cohort_kernels::texture`), 0 for none.
+    pub texture: u32,
+    /// Spot: tan(cutoff), which maps directions to its texture; projector: tan(fov_x / 2).
+    pub uv_factor: f32,
+    /// Projector: its image's width / height.
+    pub aspect: f32,
+    pub pad: u32,
 }
 
 /// `state.w` bits of a ray slot.

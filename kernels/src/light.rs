@@ -90,32 +90,61 @@ pub fn delta_light_direction(lights: &[DeltaLight], k: u32, o: Vec3) -> Vec4 {
 }
 
 /// What delta light `k` delivers along `wi` (towards the light) from `dist` away: its
-/// irradiance (directional), or its intensity in direction -`wi` over the squared
-/// distance (point; spot, with Mitsuba's linear falloff in angle from the beam width to
-/// the cutoff).
+/// irradiance (directional); its intensity in direction -`wi` over the squared distance
+/// (point; spot, with Mitsuba's linear falloff in angle from the beam width to the cutoff,
+/// times its texture); or, for a projector, its image's irradiance at the point as Mitsuba
+/// defines it (pi scale E(uv) / (z^2 cos), z the depth along its axis).
 #[kernel_fn]
-pub fn delta_light_arrival(lights: &[DeltaLight], k: u32, wi: Vec3, dist: f32) -> Vec3 {
+pub fn delta_light_arrival(
+    lights: &[DeltaLight],
+    textures: &[Vec4],
+    k: u32,
+    wi: Vec3,
+    dist: f32,
+) -> Vec3 {
     let e = lights[k as usize];
     let mut r = e.intensity;
     if e.kind != DIRECTIONAL_LIGHT {
-        let mut falloff = 1.0f32;
-        if e.kind == SPOT_LIGHT {
-            let d = -wi;
-            let local = Vec3::new(
-                e.to_local_x.dot(d),
-                e.to_local_y.dot(d),
-                e.to_local_z.dot(d),
-            );
-            let c = local.z / local.length();
-            if c > e.cos_cutoff {
-                if c < e.cos_beam {
-                    falloff = (e.cutoff - c.acos()) * e.inv_transition;
+        let d = -wi;
+        let local = Vec3::new(
+            e.to_local_x.dot(d),
+            e.to_local_y.dot(d),
+            e.to_local_z.dot(d),
+        );
+        if e.kind == PROJECTOR_LIGHT {
+            r = Vec3::ZERO;
+            let z = local.z * dist;
+            let cos = e.direction.dot(d);
+            if local.z > 0.0 && cos > 0.0 {
+                let t = local.z * e.uv_factor;
+                let uv = Vec2::new(0.5 - 0.5 * local.x / t, 0.5 - 0.5 * e.aspect * local.y / t);
+                if uv.x >= 0.0 && uv.x <= 1.0 && uv.y >= 0.0 && uv.y <= 1.0 {
+                    let mut irradiance = e.intensity;
+                    if e.texture != 0 {
+                        irradiance *= crate::texture::texture_eval(textures, e.texture - 1, uv);
+                    }
+                    r = irradiance * (core::f32::consts::PI / (z * z * cos));
                 }
-            } else {
-                falloff = 0.0;
             }
+        } else {
+            let mut falloff = 1.0f32;
+            if e.kind == SPOT_LIGHT {
+                let c = local.z / local.length();
+                if c > e.cos_cutoff {
+                    if c < e.cos_beam {
+                        falloff = (e.cutoff - c.acos()) * e.inv_transition;
+                    }
+                    if e.texture != 0 {
+                        let t = local.z * e.uv_factor;
+                        let uv = Vec2::new(0.5 + 0.5 * local.x / t, 0.5 + 0.5 * local.y / t);
+                        r = r * crate::texture::texture_eval(textures, e.texture - 1, uv);
+                    }
+                } else {
+                    falloff = 0.0;
+                }
+            }
+            r = r * (falloff / (dist * dist));
         }
-        r = e.intensity * (falloff / (dist * dist));
     }
     r
 }

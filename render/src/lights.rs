@@ -1,5 +1,6 @@
 //! The emitters of a scene as next-event estimation samples them: an alias table over the
-//! emitter triangles (in BVH leaf order) and the delta lights (point, spot, directional),
+//! emitter triangles (in BVH leaf order) and the delta lights (point, spot, directional,
+//! projector),
 //! each chosen in proportion to its power, and the probability of sampling the
 //! environment (constant or map) instead (half the samples when there are other lights).
 //!
@@ -10,7 +11,8 @@
 //! times the cross-section pi R^2 of the scene's bounding sphere.
 
 use cohort_kernels::layout::{
-    DeltaLight, LightEntry, Triangle, DELTA_LIGHT, DIRECTIONAL_LIGHT, POINT_LIGHT, SPOT_LIGHT,
+    DeltaLight, LightEntry, Triangle, DELTA_LIGHT, DIRECTIONAL_LIGHT, POINT_LIGHT, PROJECTOR_LIGHT,
+    SPOT_LIGHT,
 };
 use cohort_scenes::{Light, Scene};
 use glam::{Mat3, Vec3};
@@ -49,8 +51,9 @@ fn scene_radius(tris: &[Triangle]) -> f64 {
 }
 
 /// The kernel's form of a delta light (its selection probability filled in later) and
-/// its estimated power.
-fn delta_light(light: &Light, radius: f64) -> (DeltaLight, f64) {
+/// its estimated power; `starts`: where each texture starts in the kernels' array.
+fn delta_light(light: &Light, radius: f64, starts: &[u32]) -> (DeltaLight, f64) {
+    let header = |t: Option<u32>| t.map_or(0, |t| starts[t as usize] + 1);
     match *light {
         Light::Point {
             position,
@@ -69,6 +72,7 @@ fn delta_light(light: &Light, radius: f64) -> (DeltaLight, f64) {
             intensity,
             cutoff_angle,
             beam_width,
+            texture,
         } => {
             let inv = Mat3::from_mat4(to_world).inverse();
             let mid = 0.5 * (cutoff_angle + beam_width) as f64;
@@ -88,9 +92,39 @@ fn delta_light(light: &Light, radius: f64) -> (DeltaLight, f64) {
                     } else {
                         0.0
                     },
+                    texture: header(texture),
+                    uv_factor: cutoff_angle.tan(),
                     ..Default::default()
                 },
                 2.0 * PI * (1.0 - mid.cos()) * luminance(intensity) as f64,
+            )
+        }
+        Light::Projector {
+            to_world,
+            irradiance,
+            texture,
+            tan_half_fov,
+            aspect,
+        } => {
+            let inv = Mat3::from_mat4(to_world).inverse();
+            // The pyramid's solid angle is about its image area (2 t)^2 / aspect at unit
+            // distance; the image's mean is unknown here, so its scale stands in.
+            let area = 4.0 * (tan_half_fov * tan_half_fov / aspect) as f64;
+            (
+                DeltaLight {
+                    kind: PROJECTOR_LIGHT,
+                    position: to_world.transform_point3(Vec3::ZERO),
+                    intensity: irradiance,
+                    to_local_x: inv.row(0),
+                    to_local_y: inv.row(1),
+                    to_local_z: inv.row(2),
+                    direction: to_world.transform_vector3(Vec3::Z),
+                    texture: header(texture),
+                    uv_factor: tan_half_fov,
+                    aspect,
+                    ..Default::default()
+                },
+                PI * area * luminance(irradiance) as f64,
             )
         }
         Light::Directional {
@@ -129,8 +163,9 @@ pub fn build(scene: &Scene, tris: &mut [Triangle]) -> LightTable {
         }
     }
     let mut delta = Vec::new();
+    let starts = cohort_scenes::texture::gpu_texture_starts(&scene.textures);
     for light in &scene.lights {
-        let (d, p) = delta_light(light, radius);
+        let (d, p) = delta_light(light, radius, &starts);
         if p > 0.0 && p.is_finite() {
             power.push((DELTA_LIGHT | delta.len() as u32, p, 0.0));
             delta.push(d);

@@ -417,3 +417,29 @@ fn bump_maps_removed_fail() {
         }
     });
 }
+
+#[test]
+fn projector_of_a_bitmap() {
+    check("projector");
+}
+
+#[test]
+fn spot_light_with_a_texture() {
+    check("spot_texture");
+}
+
+/// The light textures matter at this budget: without them both scenes fail.
+#[test]
+fn spot_and_projector_without_their_textures_fail() {
+    for name in ["spot_texture", "projector"] {
+        assert_fails(name, |scene| {
+            for light in &mut scene.lights {
+                if let cohort_scenes::Light::Spot { texture, .. }
+                | cohort_scenes::Light::Projector { texture, .. } = light
+                {
+                    *texture = None;
+                }
+            }
+        });
+    }
+}

@@ -164,29 +164,7 @@ impl Camera {
     /// The horizontal full field of view in degrees, converted from `fov` / `fov_axis` exactly as
     /// Mitsuba's `parse_fov` does (Mitsuba stores only the x angle).
     pub fn fov_x(&self) -> f32 {
-        let aspect = self.aspect() as f64;
-        let axis = match self.fov_axis {
-            FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
-            FovAxis::Smaller => FovAxis::X,
-            FovAxis::Larger if aspect > 1.0 => FovAxis::X,
-            FovAxis::Larger => FovAxis::Y,
-            a => a,
-        };
-        let fov = self.fov as f64;
-        let x = match axis {
-            FovAxis::Y => {
-                2.0 * ((0.5 * fov.to_radians()).tan() * aspect)
-                    .atan()
-                    .to_degrees()
-            }
-            FovAxis::Diagonal => {
-                let diagonal = 2.0 * (0.5 * fov.to_radians()).tan();
-                let width = diagonal / (1.0 + 1.0 / (aspect * aspect)).sqrt();
-                2.0 * (width * 0.5).atan().to_degrees()
-            }
-            _ => fov,
-        };
-        x as f32
+        fov_x(self.fov, self.fov_axis, self.aspect())
     }
 
     /// Tangents of the half angles along image x and y.
@@ -289,4 +267,32 @@ pub fn look_at_matrix(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
         dir.extend(0.0),
         origin.extend(1.0),
     ))
+}
+
+/// The horizontal full field of view in degrees of a field of view `fov` (degrees) along
+/// `axis` of an image of width / height `aspect`, exactly as Mitsuba's `parse_fov` converts it.
+pub fn fov_x(fov: f32, axis: FovAxis, aspect: f32) -> f32 {
+    let aspect = aspect as f64;
+    let axis = match axis {
+        FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
+        FovAxis::Smaller => FovAxis::X,
+        FovAxis::Larger if aspect > 1.0 => FovAxis::X,
+        FovAxis::Larger => FovAxis::Y,
+        a => a,
+    };
+    let fov = fov as f64;
+    let x = match axis {
+        FovAxis::Y => {
+            2.0 * ((0.5 * fov.to_radians()).tan() * aspect)
+                .atan()
+                .to_degrees()
+        }
+        FovAxis::Diagonal => {
+            let diagonal = 2.0 * (0.5 * fov.to_radians()).tan();
+            let width = diagonal / (1.0 + 1.0 / (aspect * aspect)).sqrt();
+            2.0 * (width * 0.5).atan().to_degrees()
+        }
+        _ => fov,
+    };
+    x as f32
 }

@@ -116,6 +116,21 @@ pub enum Light {
         intensity: Vec3,
         cutoff_angle: f32,
         beam_width: f32,
+        /// Mitsuba's `texture`: index into [`Scene::textures`] of the image that colours the
+        /// beam (at u, v = 0.5 + 0.5 (x, y) / (z tan cutoff) of the spot's frame).
+        texture: Option<u32>,
+    },
+    /// Mitsuba `projector`: a pinhole projecting `irradiance` (or, where given, the texture
+    /// `texture` times `scale`) along its +z: the irradiance at distance 1 on the axis is the
+    /// image value times pi `scale`, as Mitsuba defines it.
+    Projector {
+        to_world: Mat4,
+        /// Constant irradiance times `scale` (with a texture: `scale` in every channel).
+        irradiance: Vec3,
+        texture: Option<u32>,
+        /// tan(fov_x / 2) of the projected image, and its width / height.
+        tan_half_fov: f32,
+        aspect: f32,
     },
     /// Parallel light travelling along `direction` (unit) with `irradiance` (W/m^2) on a
     /// surface facing it.

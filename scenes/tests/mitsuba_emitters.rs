@@ -43,6 +43,7 @@ fn spot_defaults_are_mitsubas() {
         intensity,
         cutoff_angle,
         beam_width,
+        texture: None,
     }] = l.as_slice()
     else {
         panic!("{l:?}")
@@ -59,8 +60,65 @@ fn spot_defaults_are_mitsubas() {
     );
     let e = lights(r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="12"/></emitter>"#).unwrap_err();
     assert!(e.contains("beam_width 12"), "{e}");
-    let e = lights(r#"<emitter type="spot"><texture type="bitmap" name="texture"><string name="filename" value="x.png"/></texture></emitter>"#).unwrap_err();
-    assert!(e.contains("'texture' is not supported"), "{e}");
+    let e = lights(r#"<emitter type="spot"><rgb name="texture" value="1, 0, 0"/></emitter>"#)
+        .unwrap_err();
+    assert!(e.contains("must be spatially varying"), "{e}");
+}
+
+/// A spot's texture and a projector's image, scale and field of view (along y here: its
+/// x angle follows from the image's aspect, as Mitsuba's `parse_fov` converts it).
+#[test]
+fn textured_spot_and_projector() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../render/tests/scenes/mitsuba/textures");
+    let xml = r#"<scene version="3.0.0">
+        <emitter type="spot"><texture type="checkerboard" name="texture"/></emitter>
+        <emitter type="projector">
+            <texture type="bitmap" name="irradiance"><string name="filename" value="stripes.png"/></texture>
+            <float name="scale" value="2"/><float name="fov" value="30"/><string name="fov_axis" value="y"/>
+        </emitter>
+        <emitter type="projector"><rgb name="irradiance" value="1, 2, 3"/></emitter>
+    </scene>"#;
+    let s = load_mitsuba_str(xml, &dir).unwrap().scene;
+    let [Light::Spot {
+        texture: Some(_), ..
+    }, Light::Projector {
+        irradiance,
+        texture: Some(t),
+        tan_half_fov,
+        aspect,
+        ..
+    }, Light::Projector {
+        irradiance: constant,
+        texture: None,
+        aspect: square,
+        tan_half_fov: default_fov,
+        ..
+    }] = s.lights.as_slice()
+    else {
+        panic!("{:?}", s.lights)
+    };
+    assert!(matches!(
+        s.textures[*t as usize],
+        cohort_scenes::Texture::Bitmap {
+            width: 16,
+            height: 12,
+            ..
+        }
+    ));
+    assert_eq!(*irradiance, Vec3::splat(2.0));
+    assert!((aspect - 16.0 / 12.0).abs() < 1e-6);
+    // tan(fov_x / 2) = tan(fov_y / 2) * aspect.
+    assert!((tan_half_fov - 15f32.to_radians().tan() * aspect).abs() < 1e-5);
+    assert_eq!(*constant, Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(*square, 1.0);
+    // Mitsuba's default: a 50 mm lens, diagonal, on a square image.
+    // (tan of half the diagonal angle: half the 43.27 mm film diagonal over 50 mm.)
+    let half_diagonal = (36f32 * 36.0 + 24.0 * 24.0).sqrt() / 100.0;
+    assert!(
+        (default_fov - half_diagonal / 2f32.sqrt()).abs() < 1e-4,
+        "{default_fov}"
+    );
 }
 
 #[test]

@@ -618,8 +618,8 @@ fn unsupported_plugins_strict_and_lenient() {
     let dir = tmp_dir("unsupported");
     for (body, plugin, instead) in [
         (
-            r#"<emitter type="projector"><float name="fov" value="30"/></emitter>"#,
-            "emitter 'projector'",
+            r#"<emitter type="directionalarea"/>"#,
+            "emitter 'directionalarea'",
             "skipped",
         ),
         (r#"<emitter type="sunsky"/>"#, "emitter 'sunsky'", "skipped"),

@@ -1,5 +1,5 @@
 //! Mitsuba emitters that are not attached to a shape: `constant` and `envmap` (the
-//! environment), `point`, `spot` and `directional`, read with Mitsuba 3.9's parameters and defaults. (`area` emitters
+//! environment), `point`, `spot` (with its `texture`), `projector` and `directional`, read with Mitsuba 3.9's parameters and defaults. (`area` emitters
 //! are read where their shape is, in `shape.rs`.)
 
 use glam::{Mat4, Vec3};
@@ -92,7 +92,7 @@ pub(crate) fn emitter<'a>(
         }
         "spot" => {
             let intensity = spectrum(ctx, obj, "intensity")?;
-            let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+            let to_world = invertible_to_world(obj)?;
             let cutoff = obj.float("cutoff_angle")?.unwrap_or(20.0);
             let beam = obj.float("beam_width")?.unwrap_or(cutoff * 0.75);
             if !(cutoff > 0.0 && cutoff <= 180.0) {
@@ -110,26 +110,62 @@ pub(crate) fn emitter<'a>(
                     ),
                 ));
             }
-            if glam::Mat3::from_mat4(to_world).determinant() == 0.0 {
-                return Err(syntax(
-                    obj.loc_of("to_world"),
-                    "emitter 'spot': to_world is singular",
-                ));
-            }
-            if obj.has("texture") {
-                ctx.diag.unsupported(
-                    obj.loc_of("texture"),
-                    "emitter 'spot': a projected 'texture' is not supported",
-                    "rendered without it",
-                )?;
-                obj.ignore("texture");
-            }
+            // Mitsuba: the texture must vary over the beam (a bitmap or checkerboard).
+            let texture = match ctx.color_or_texture(obj, "texture")? {
+                None => None,
+                Some((_, Some(t))) => Some(t),
+                Some((_, None)) => {
+                    return Err(syntax(
+                        obj.loc_of("texture"),
+                        "emitter 'spot': 'texture' must be spatially varying (e.g. a bitmap), as in Mitsuba",
+                    ))
+                }
+            };
             obj.finish(&mut ctx.diag)?;
             out.lights.push(Light::Spot {
                 to_world,
                 intensity,
                 cutoff_angle: cutoff.to_radians(),
                 beam_width: beam.to_radians(),
+                texture,
+            });
+        }
+        "projector" => {
+            let scale = obj.float("scale")?.unwrap_or(1.0);
+            if !(scale.is_finite() && scale >= 0.0) {
+                return Err(syntax(
+                    obj.loc_of("scale"),
+                    format!("emitter 'projector': scale {scale} must be finite and >= 0"),
+                ));
+            }
+            let (irradiance, texture) = match ctx.color_or_texture(obj, "irradiance")? {
+                None => (Vec3::ONE, None),
+                Some((c, None)) => (c, None),
+                Some((_, Some(t))) => (Vec3::ONE, Some(t)),
+            };
+            if !(irradiance.is_finite() && irradiance.min_element() >= 0.0) {
+                return Err(syntax(
+                    obj.loc_of("irradiance"),
+                    "emitter 'projector': irradiance must be finite and >= 0",
+                ));
+            }
+            // The image's aspect ratio shapes the projection (1 for a constant).
+            let aspect = match texture.map(|t| &ctx.textures[t as usize]) {
+                Some(crate::texture::Texture::Bitmap { width, height, .. }) => {
+                    *width as f32 / *height as f32
+                }
+                _ => 1.0,
+            };
+            let (fov, axis) = super::read_fov(obj)?;
+            let fov_x = crate::camera::fov_x(fov, axis, aspect);
+            let to_world = invertible_to_world(obj)?;
+            obj.finish(&mut ctx.diag)?;
+            out.lights.push(Light::Projector {
+                to_world,
+                irradiance: irradiance * scale,
+                texture,
+                tan_half_fov: (0.5 * fov_x.to_radians()).tan(),
+                aspect,
             });
         }
         "directional" => {
@@ -179,13 +215,7 @@ fn environment_map<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<EnvironmentMap
             format!("emitter 'envmap': scale {scale} must be finite and >= 0"),
         ));
     }
-    let to_world = glam::Mat3::from_mat4(obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY));
-    if !(to_world.determinant() != 0.0 && to_world.is_finite()) {
-        return Err(syntax(
-            obj.loc_of("to_world"),
-            "emitter 'envmap': to_world is singular",
-        ));
-    }
+    let to_world = glam::Mat3::from_mat4(invertible_to_world(obj)?);
     obj.ignore("mis_compensation");
     obj.finish(&mut ctx.diag)?;
     let image = read_image(&path, false)
@@ -210,6 +240,19 @@ fn environment_map<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<EnvironmentMap
         scale,
         to_world,
     ))
+}
+
+/// The emitter's `to_world` (identity when absent), which must be invertible.
+fn invertible_to_world(obj: &Obj) -> Result<Mat4, SceneError> {
+    let m = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let linear = glam::Mat3::from_mat4(m);
+    if !(linear.determinant() != 0.0 && linear.is_finite()) {
+        return Err(syntax(
+            obj.loc_of("to_world"),
+            format!("emitter '{}': to_world is singular", obj.plugin),
+        ));
+    }
+    Ok(m)
 }
 
 /// Mitsuba's rule for `point` (`position`) and `directional` (`direction`): the vector

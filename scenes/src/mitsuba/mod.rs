@@ -443,8 +443,9 @@ fn read_thinlens(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
     })
 }
 
-fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
-    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+/// Mitsuba's `fov` + `fov_axis` (default x) or `focal_length` (default 50mm, a diagonal
+/// field of view on a 36 x 24 mm film), as its `parse_fov` reads them: (degrees, axis).
+pub(crate) fn read_fov(obj: &Obj) -> Result<(f32, FovAxis), SceneError> {
     let (fov, fov_axis) = match (obj.float("fov")?, obj.string("focal_length")?) {
         (Some(_), Some(_)) => {
             return Err(syntax(
@@ -474,6 +475,12 @@ fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
             format!("fov {fov} is not in (0, 180)"),
         ));
     }
+    Ok((fov, fov_axis))
+}
+
+fn read_perspective(ctx: &mut Ctx, obj: &Obj) -> Result<Camera, SceneError> {
+    let to_world = obj.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let (fov, fov_axis) = read_fov(obj)?;
     let near_clip = obj.float("near_clip")?.unwrap_or(1e-2);
     let far_clip = obj.float("far_clip")?.unwrap_or(1e4);
     if !(near_clip > 0.0 && near_clip < far_clip) {
