@@ -198,6 +198,40 @@ def write_sky_exr(path):
     mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB).write(path)
 
 
+def write_colored_ply(path):
+    """An ASCII PLY with float vertex colours (r, g, b): a 5 x 5 grid quad in z = 0 spanning
+    [-1, 1]^2 whose colours run red to green across and blue up, and an octahedron of radius
+    0.35 above it at z = 0.5 with one colour per vertex."""
+    verts, faces = [], []
+    n = 5
+    for j in range(n):
+        for i in range(n):
+            x, y = -1 + 2 * i / (n - 1), -1 + 2 * j / (n - 1)
+            verts.append((x, y, 0.0, 0.9 * (1 - i / (n - 1)), 0.9 * i / (n - 1), 0.8 * j / (n - 1)))
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a = j * n + i
+            faces += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
+    base = len(verts)
+    octa = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]
+    cols = [(0.9, 0.1, 0.1), (0.1, 0.9, 0.1), (0.1, 0.1, 0.9), (0.9, 0.9, 0.1), (0.9, 0.1, 0.9), (0.1, 0.9, 0.9)]
+    for (x, y, z), c in zip(octa, cols):
+        verts.append((0.35 * x, 0.35 * y, 0.5 + 0.35 * z) + c)
+    for f in [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]:
+        faces.append(tuple(base + k for k in f))
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        f.write("ply\nformat ascii 1.0\n")
+        f.write(f"element vertex {len(verts)}\n")
+        for p in ("x", "y", "z", "r", "g", "b"):
+            f.write(f"property float {p}\n")
+        f.write(f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for v in verts:
+            f.write(" ".join(f"{c:.6f}" for c in v) + "\n")
+        for t in faces:
+            f.write("3 " + " ".join(str(k) for k in t) + "\n")
+
+
 def write_textured_obj(path):
     """A unit quad in z = 0 (two triangles) with texture coordinates running 0..2 in u and
     0..1 in v, so that Mitsuba's flip of an OBJ's v and the repeat wrap both show."""
@@ -748,6 +782,20 @@ SCENES = {
         <texture type="bitmap" name="texture"><string name="filename" value="textures/stripes.png"/></texture>
     </emitter>""",
     ),
+    # Vertex colours of a PLY (meshes/colored.ply, see write_colored_ply) through a
+    # `mesh_attribute` texture with a scale, on a diffuse grid and octahedron.
+    "vertex_colors": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="ply">
+        <string name="filename" value="meshes/colored.ply"/>
+        <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="-20"/><translate y="0.8" z="-0.6"/></transform>
+        <bsdf type="diffuse">
+            <texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/><float name="scale" value="0.9"/></texture>
+        </bsdf>
+    </shape>""",
+    ),
     "directional": scene(
         "",
         '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'
@@ -797,6 +845,7 @@ def main():
     os.makedirs(OUT, exist_ok=True)
     write_serialized(os.path.join(OUT, "meshes", "shapes.serialized"))
     write_textured_obj(os.path.join(OUT, "meshes", "textured_quad.obj"))
+    write_colored_ply(os.path.join(OUT, "meshes", "colored.ply"))
     write_png(os.path.join(OUT, "textures", "stripes.png"))
     write_sky_exr(os.path.join(OUT, "textures", "sky.exr"))
     write_normal_map(os.path.join(OUT, "textures", "waves_normal.png"))

@@ -21,7 +21,7 @@ use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
-use crate::texture::{hit_uv, luminance, texture_eval};
+use crate::texture::{hit_uv, luminance, surface_color, texture_eval};
 use cohort::prelude::*;
 
 /// Bins of the reconstruction filter's table across `[-radius, radius]`
@@ -431,7 +431,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
                 let mut albedo = m.color;
                 if m.texture != 0 {
-                    albedo = texture_eval(textures, m.texture - 1, uv);
+                    albedo = surface_color(textures, m.texture - 1, uv, t.original, h);
                 }
                 // Mitsuba `mask`: the BSDF scatters with probability `opacity`, else the path
                 // passes through (a null interaction: one more vertex, a delta density).

@@ -6,6 +6,8 @@ use cohort::prelude::*;
 
 /// Header flags (`cohort_scenes::texture`).
 pub const TEXTURE_BITMAP: u32 = 1;
+/// Mitsuba `mesh_attribute` `vertex_color` (`surface_color`).
+pub const TEXTURE_VERTEX_COLOR: u32 = 2;
 pub const FILTER_NEAREST: u32 = 1;
 pub const WRAP_MIRROR: u32 = 2;
 pub const WRAP_CLAMP: u32 = 4;
@@ -151,4 +153,23 @@ pub fn texture_gradient(textures: &[Vec4], header: u32, uv: Vec2) -> Vec2 {
         );
     }
     g
+}
+
+/// A BSDF colour's texture at hit `h` (barycentric weights of v1 and v2 in `h.y`, `h.z`) of
+/// triangle `original`, whose texture coordinates are `uv`: the triangle's vertex colours
+/// interpolated, times the texture's scale, for Mitsuba's `mesh_attribute` `vertex_color`
+/// (the colours, 3 per triangle, start where header entry 0's y says); else `texture_eval`.
+#[kernel_fn]
+pub fn surface_color(textures: &[Vec4], header: u32, uv: Vec2, original: u32, h: Vec4) -> Vec3 {
+    let h0 = textures[header as usize];
+    if h0.x.to_bits() == TEXTURE_VERTEX_COLOR {
+        let k = h0.y.to_bits() + 3 * original;
+        let scale = textures[(header + 3) as usize].x;
+        (textures[k as usize].truncate() * (1.0 - h.y - h.z)
+            + textures[(k + 1) as usize].truncate() * h.y
+            + textures[(k + 2) as usize].truncate() * h.z)
+            * scale
+    } else {
+        texture_eval(textures, header, uv)
+    }
 }

@@ -358,7 +358,7 @@ fn bitmap_textures_on_rectangle_obj_and_plastic() {
 /// colour fail the test.
 #[test]
 fn textures_replaced_by_their_means_fail() {
-    for name in ["checkerboard", "bitmap"] {
+    for name in ["checkerboard", "bitmap", "vertex_colors"] {
         assert_fails(name, |scene| {
             for m in &mut scene.materials {
                 m.texture = None;
@@ -442,4 +442,9 @@ fn spot_and_projector_without_their_textures_fail() {
             }
         });
     }
+}
+
+#[test]
+fn vertex_colors_of_a_ply() {
+    check("vertex_colors");
 }

@@ -92,6 +92,9 @@ impl SceneBuilder {
         if mesh.uvs.is_some() && self.scene.triangles.uvs.is_none() {
             self.scene.triangles.uvs = Some(BARYCENTRIC_UVS.repeat(self.scene.triangles.len()));
         }
+        if mesh.colors.is_some() && self.scene.triangles.colors.is_none() {
+            self.scene.triangles.colors = Some(vec![Vec3::ZERO; 3 * self.scene.triangles.len()]);
+        }
 
         let tris = &mut self.scene.triangles;
         let first = tris.len() as u32;
@@ -111,6 +114,12 @@ impl SceneBuilder {
                 match &mesh.uvs {
                     Some(m) => uvs.extend(t.map(|i| m[i as usize])),
                     None => uvs.extend(BARYCENTRIC_UVS),
+                }
+            }
+            if let Some(colors) = &mut tris.colors {
+                match &mesh.colors {
+                    Some(c) => colors.extend(t.map(|i| c[i as usize])),
+                    None => colors.extend([Vec3::ZERO; 3]),
                 }
             }
             if let Some(normals) = &mut tris.normals {

@@ -12,6 +12,9 @@ pub struct TriMesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates (same length as `positions`) when the source had them.
     pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex colours (same length as `positions`) when the source had them (a PLY's
+    /// r, g, b or red, green, blue).
+    pub colors: Option<Vec<Vec3>>,
     /// Counter-clockwise = front.
     pub indices: Vec<[u32; 3]>,
 }
@@ -69,6 +72,11 @@ impl TriMesh {
             (Some(a), Some(b)) => a.extend_from_slice(b),
             (None, Some(b)) if !had_positions => self.uvs = Some(b.clone()),
             _ => self.uvs = None,
+        }
+        match (&mut self.colors, &other.colors) {
+            (Some(a), Some(b)) => a.extend_from_slice(b),
+            (None, Some(b)) if !had_positions => self.colors = Some(b.clone()),
+            _ => self.colors = None,
         }
         self.positions.extend_from_slice(&other.positions);
         self.indices.extend(

@@ -70,6 +70,7 @@ pub fn parse_obj(bytes: &[u8], file: &Path) -> Result<TriMesh, SceneError> {
             positions,
             normals,
             uvs,
+            colors: None,
             indices,
         });
     }

@@ -441,6 +441,7 @@ pub fn parse_ply(
     let mut mesh = TriMesh::new();
     let mut normals: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<glam::Vec2> = Vec::new();
+    let mut colors: Vec<Vec3> = Vec::new();
     let mut list = Vec::new();
     let mut short_faces = 0u64;
 
@@ -464,6 +465,24 @@ pub fn parse_ply(
                     find(&["v", "t", "texture_v", "texture_t"]),
                 ];
                 let has_uvs = uv.iter().all(Option::is_some);
+                // Colours under the names Mitsuba groups into `vertex_color`.
+                let mut rgb = [find(&["r"]), find(&["g"]), find(&["b"])];
+                if rgb.iter().any(Option::is_none) {
+                    rgb = [find(&["red"]), find(&["green"]), find(&["blue"])];
+                }
+                let has_colors = rgb.iter().all(Option::is_some);
+                // Mitsuba converts integer channels to float as they are, not over their range.
+                if has_colors
+                    && rgb.iter().flatten().any(|&k| {
+                        matches!(element.properties[k].ty, PropertyType::Scalar(t) if t.is_integer())
+                    })
+                {
+                    warnings.push(Warning::new(
+                        Location::line(file, element.line),
+                        "vertex colours have integer fields: Mitsuba reads them as they are \
+                         (colour attributes are expected to be in [0, 1])",
+                    ));
+                }
                 if xyz.iter().any(Option::is_none) {
                     return Err(syntax(
                         file,
@@ -480,6 +499,7 @@ pub fn parse_ply(
                     let mut p = [0f32; 3];
                     let mut n = [0f32; 3];
                     let mut t = [0f32; 2];
+                    let mut c = [0f32; 3];
                     for (k, prop) in element.properties.iter().enumerate() {
                         match &prop.ty {
                             PropertyType::Scalar(ty) => {
@@ -490,6 +510,8 @@ pub fn parse_ply(
                                     n[axis] = v;
                                 } else if let Some(axis) = uv.iter().position(|&i| i == Some(k)) {
                                     t[axis] = v;
+                                } else if let Some(axis) = rgb.iter().position(|&i| i == Some(k)) {
+                                    c[axis] = v;
                                 }
                             }
                             PropertyType::List { count, item } => {
@@ -513,12 +535,18 @@ pub fn parse_ply(
                     if has_uvs {
                         uvs.push(glam::Vec2::from(t));
                     }
+                    if has_colors {
+                        colors.push(Vec3::from(c));
+                    }
                 }
                 if has_normals {
                     mesh.normals = Some(std::mem::take(&mut normals));
                 }
                 if has_uvs {
                     mesh.uvs = Some(std::mem::take(&mut uvs));
+                }
+                if has_colors {
+                    mesh.colors = Some(std::mem::take(&mut colors));
                 }
             }
             "face" | "tristrips" => {

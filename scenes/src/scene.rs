@@ -32,6 +32,9 @@ pub struct Triangles {
     /// Texture coordinates, 3 per triangle, or `None` when no mesh has any. Triangles of meshes
     /// without them carry (0, 0), (1, 0), (0, 1): their barycentric coordinates, as Mitsuba.
     pub uvs: Option<Vec<glam::Vec2>>,
+    /// Vertex colours (a PLY's r, g, b), 3 per triangle, or `None` when no mesh has any;
+    /// black for the triangles of meshes without them.
+    pub colors: Option<Vec<Vec3>>,
     /// Index into [`Scene::materials`], 1 per triangle.
     pub materials: Vec<u32>,
 }
@@ -225,6 +228,9 @@ impl Scene {
     /// the environment map's (`EnvironmentMap::gpu_layout`), if any.
     pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
         let mut data = crate::texture::gpu_textures(&self.textures).0;
+        if crate::texture::uses_vertex_colors(&self.textures) {
+            data.extend(self.gpu_vertex_colors());
+        }
         if let Some(map) = &self.environment_map {
             data.extend(map.gpu_layout());
         }
@@ -234,8 +240,23 @@ impl Scene {
     /// Where the environment map starts in [`Scene::gpu_textures`], plus one (0: no map).
     pub fn gpu_environment_map(&self) -> u32 {
         match &self.environment_map {
-            Some(_) => crate::texture::gpu_textures_len(&self.textures) + 1,
+            Some(_) => {
+                let mut at = crate::texture::gpu_textures_len(&self.textures) + 1;
+                if crate::texture::uses_vertex_colors(&self.textures) {
+                    at += 3 * self.triangles.len() as u32;
+                }
+                at
+            }
             None => 0,
+        }
+    }
+
+    /// The triangles' corner colours (3 per triangle in the scene's order; black where a
+    /// mesh has none), as a vertex-colour texture reads them after the textures.
+    fn gpu_vertex_colors(&self) -> Vec<[f32; 4]> {
+        match &self.triangles.colors {
+            Some(c) => c.iter().map(|c| c.extend(0.0).to_array()).collect(),
+            None => vec![[0.0; 4]; 3 * self.triangles.len()],
         }
     }
 

@@ -13,6 +13,9 @@ pub const HEADER_LEN: usize = 5;
 /// Header kinds.
 pub const CHECKERBOARD: u32 = 0;
 pub const BITMAP: u32 = 1;
+/// Mitsuba `mesh_attribute` `vertex_color`: header entry 0 holds (kind, start of the
+/// per-triangle corner colours in the array, 0, 0) and entry 3 (scale, 0, 0, 0).
+pub const MESH_ATTRIBUTE: u32 = 2;
 /// Header flags: the bitmap's filter and wrap mode.
 pub const FILTER_NEAREST: u32 = 1;
 pub const WRAP_MIRROR: u32 = 2;
@@ -71,12 +74,18 @@ pub enum Texture {
         wrap: Wrap,
         to_uv: UvTransform,
     },
+    /// Mitsuba `mesh_attribute` named `vertex_color`: the hit triangle's vertex colours
+    /// ([`crate::Triangles::colors`]) interpolated at the hit, times `scale`. It varies with
+    /// the surface point, not with (u, v): [`Texture::eval`] and [`Texture::mean`] give grey
+    /// 0.5 x `scale` for it.
+    VertexColor { scale: f32 },
 }
 
 impl Texture {
     /// The colour at surface coordinates `uv`, as the kernels compute it.
     pub fn eval(&self, uv: Vec2) -> Vec3 {
         match self {
+            Texture::VertexColor { scale } => Vec3::splat(0.5 * scale),
             Texture::Checkerboard {
                 color0,
                 color1,
@@ -130,12 +139,14 @@ impl Texture {
             Texture::Bitmap { texels, .. } => {
                 texels.iter().copied().sum::<Vec3>() / texels.len().max(1) as f32
             }
+            Texture::VertexColor { scale } => Vec3::splat(0.5 * scale),
         }
     }
 
     fn to_uv(&self) -> UvTransform {
         match self {
             Texture::Checkerboard { to_uv, .. } | Texture::Bitmap { to_uv, .. } => *to_uv,
+            Texture::VertexColor { .. } => UvTransform::IDENTITY,
         }
     }
 }
@@ -185,7 +196,7 @@ fn gpu_len(t: &Texture) -> u32 {
     HEADER_LEN as u32
         + match t {
             Texture::Bitmap { texels, .. } => texels.len() as u32,
-            Texture::Checkerboard { .. } => 0,
+            Texture::Checkerboard { .. } | Texture::VertexColor { .. } => 0,
         }
 }
 
@@ -218,6 +229,15 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<[f32; 4]>, Vec<u32>) {
                 };
                 (BITMAP, *width, *height, flags, Vec3::ZERO, Vec3::ZERO)
             }
+            // The colours follow every texture: their start is filled in below.
+            Texture::VertexColor { scale } => (
+                MESH_ATTRIBUTE,
+                0,
+                0,
+                0,
+                Vec3::new(*scale, 0.0, 0.0),
+                Vec3::ZERO,
+            ),
         };
         let bits = |v: u32| f32::from_bits(v);
         data.push([bits(kind), bits(w), bits(h), bits(flags)]);
@@ -229,7 +249,21 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<[f32; 4]>, Vec<u32>) {
             data.extend(texels.iter().map(|c| c.extend(0.0).to_array()));
         }
     }
+    let total = data.len() as u32;
+    for (t, &start) in textures.iter().zip(&starts) {
+        if let Texture::VertexColor { .. } = t {
+            data[start as usize][1] = f32::from_bits(total);
+        }
+    }
     (data, starts)
+}
+
+/// Whether any of `textures` reads the meshes' vertex colours (which then follow the
+/// textures in the kernels' array: `Scene::gpu_textures`).
+pub fn uses_vertex_colors(textures: &[Texture]) -> bool {
+    textures
+        .iter()
+        .any(|t| matches!(t, Texture::VertexColor { .. }))
 }
 
 #[cfg(test)]

@@ -393,3 +393,44 @@ fn normal_and_bump_maps_are_read_as_mitsuba_reads_them() {
         assert!(e.contains(message) && e.contains(":3"), "{bsdf}: {e}");
     }
 }
+
+/// `mesh_attribute` `vertex_color`: a PLY's r, g, b reach the triangles' corners; a mesh
+/// without them, another attribute name, or the texture where an image is needed are errors.
+#[test]
+fn vertex_colors_are_read_as_mitsuba_reads_them() {
+    let dir =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../render/tests/scenes/mitsuba");
+    let shape = |mesh: &str, attribute: &str| {
+        format!(
+            "<scene version=\"3.0.0\">\n<shape type=\"{mesh}\">\n<string name=\"filename\" value=\"meshes/{}\"/>\n<bsdf type=\"diffuse\"><texture type=\"mesh_attribute\" name=\"reflectance\"><string name=\"name\" value=\"{attribute}\"/><float name=\"scale\" value=\"2\"/></texture></bsdf>\n</shape>\n</scene>",
+            if mesh == "ply" { "colored.ply" } else { "textured_quad.obj" }
+        )
+    };
+    let s = load_mitsuba_str(&shape("ply", "vertex_color"), &dir)
+        .unwrap()
+        .scene;
+    let colors = s.triangles.colors.as_ref().expect("vertex colours");
+    assert_eq!(colors.len(), 3 * s.triangles.len());
+    // The first grid triangle's first corner: x = -1, y = -1 in the file: (0.9, 0, 0).
+    assert!(
+        (colors[0] - Vec3::new(0.9, 0.0, 0.0)).length() < 1e-6,
+        "{}",
+        colors[0]
+    );
+    let t = s.materials[0].texture.unwrap();
+    assert!(matches!(s.textures[t as usize], Texture::VertexColor { scale } if scale == 2.0));
+
+    let e = load_mitsuba_str(&shape("obj", "vertex_color"), &dir).unwrap_err();
+    assert!(
+        e.message.contains("no vertex colours") && e.location.line_number() == Some(2),
+        "{e}"
+    );
+    let e = load_mitsuba_str(&shape("ply", "face_normal"), &dir).unwrap_err();
+    assert!(e.message.contains("only 'vertex_color'"), "{e}");
+    let e = load_mitsuba_str(
+        "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n<bsdf type=\"mask\"><texture type=\"mesh_attribute\" name=\"opacity\"><string name=\"name\" value=\"vertex_color\"/></texture><bsdf type=\"diffuse\"/></bsdf>\n</shape>\n</scene>",
+        &dir,
+    )
+    .unwrap_err();
+    assert!(e.message.contains("cannot be a mask's opacity"), "{e}");
+}

@@ -490,6 +490,9 @@ fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let (colour, texture) = ctx
         .color_or_texture(obj, "opacity")?
         .unwrap_or((Vec3::splat(0.5), None));
+    if let Some(i) = texture {
+        super::texture::image_only(ctx, i, obj.loc_of("opacity"), "a mask's opacity")?;
+    }
     let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
     let opacity = crate::texture::luminance(colour);
     obj.finish(&mut ctx.diag)?;
@@ -595,6 +598,9 @@ fn perturb<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError
         let Some((colour, t)) = ctx.color_or_texture(obj, "normalmap")? else {
             return Err(syntax(&obj.loc, "normalmap needs a 'normalmap' texture"));
         };
+        if let Some(i) = t {
+            super::texture::image_only(ctx, i, obj.loc_of("normalmap"), "a normal map")?;
+        }
         // A constant normal: a texture of one colour.
         texture = Some(t.unwrap_or_else(|| {
             ctx.textures.push(crate::texture::Texture::Checkerboard {

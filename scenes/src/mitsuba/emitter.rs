@@ -113,7 +113,10 @@ pub(crate) fn emitter<'a>(
             // Mitsuba: the texture must vary over the beam (a bitmap or checkerboard).
             let texture = match ctx.color_or_texture(obj, "texture")? {
                 None => None,
-                Some((_, Some(t))) => Some(t),
+                Some((_, Some(t))) => {
+                    super::texture::image_only(ctx, t, obj.loc_of("texture"), "a spot's texture")?;
+                    Some(t)
+                }
                 Some((_, None)) => {
                     return Err(syntax(
                         obj.loc_of("texture"),
@@ -141,7 +144,15 @@ pub(crate) fn emitter<'a>(
             let (irradiance, texture) = match ctx.color_or_texture(obj, "irradiance")? {
                 None => (Vec3::ONE, None),
                 Some((c, None)) => (c, None),
-                Some((_, Some(t))) => (Vec3::ONE, Some(t)),
+                Some((_, Some(t))) => {
+                    super::texture::image_only(
+                        ctx,
+                        t,
+                        obj.loc_of("irradiance"),
+                        "a projector's image",
+                    )?;
+                    (Vec3::ONE, Some(t))
+                }
             };
             if !(irradiance.is_finite() && irradiance.min_element() >= 0.0) {
                 return Err(syntax(

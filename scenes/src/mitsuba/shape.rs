@@ -306,6 +306,26 @@ fn add_placed<'a>(
         },
         (None, None) => DEFAULT_BSDF,
     };
+    // Mitsuba: a mesh without the attribute a `mesh_attribute` texture reads is an error.
+    let reads_colors = |b: &ParsedBsdf| {
+        b.texture.is_some_and(|t| {
+            matches!(
+                ctx.textures[t as usize],
+                crate::texture::Texture::VertexColor { .. }
+            )
+        })
+    };
+    let blend_part = parsed.blend.map(|(_, part)| ctx.blend_parts[part as usize]);
+    if mesh.colors.is_none()
+        && (reads_colors(&parsed) || blend_part.is_some_and(|b| reads_colors(&b)))
+    {
+        return Err(syntax(
+            &obj.loc,
+            format!(
+                "shape '{name}' has no vertex colours (a PLY's r, g, b) for its 'mesh_attribute' texture"
+            ),
+        ));
+    }
     let material = register_material(ctx, builder, parsed, emission);
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));

@@ -13,7 +13,26 @@ use super::Ctx;
 
 /// Whether the renderer evaluates `plugin` per surface point (else it is a constant colour).
 pub(crate) fn is_spatial(plugin: &str) -> bool {
-    matches!(plugin, "checkerboard" | "bitmap")
+    matches!(plugin, "checkerboard" | "bitmap" | "mesh_attribute")
+}
+
+/// Refuses texture `i` where only an image texture can stand (it is read at (u, v), not at
+/// a surface point): a `mesh_attribute` there is an error at `at`.
+pub(crate) fn image_only(
+    ctx: &Ctx,
+    i: u32,
+    at: &crate::error::Location,
+    what: &str,
+) -> Result<(), SceneError> {
+    match ctx.textures[i as usize] {
+        Texture::VertexColor { .. } => Err(syntax(
+            at,
+            format!(
+                "a 'mesh_attribute' texture cannot be {what} (it colours a BSDF's reflectance only)"
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Index in `ctx.textures` of texture `t` (a `checkerboard` or `bitmap`), read once per object.
@@ -29,6 +48,7 @@ pub(crate) fn texture_index<'a>(ctx: &mut Ctx<'a>, t: &'a Obj) -> Result<u32, Sc
             color1: ctx.color(t, "color1")?.unwrap_or(Vec3::splat(0.2)),
             to_uv,
         },
+        "mesh_attribute" => vertex_color(t)?,
         _ => bitmap(ctx, t, to_uv)?,
     };
     t.finish(&mut ctx.diag)?;
@@ -36,6 +56,25 @@ pub(crate) fn texture_index<'a>(ctx: &mut Ctx<'a>, t: &'a Obj) -> Result<u32, Sc
     let i = (ctx.textures.len() - 1) as u32;
     ctx.texture_ids.insert(key, i);
     Ok(i)
+}
+
+/// Mitsuba `mesh_attribute`: `name` (`vertex_color`, the PLY's r, g, b) and `scale`.
+fn vertex_color(t: &Obj) -> Result<Texture, SceneError> {
+    let name = t.string("name")?.unwrap_or_default();
+    if name != "vertex_color" {
+        let why = if name.starts_with("vertex_") || name.starts_with("face_") {
+            "only 'vertex_color' is supported"
+        } else {
+            "Mitsuba's names start with 'vertex_' or 'face_'"
+        };
+        return Err(syntax(
+            t.loc_of("name"),
+            format!("texture 'mesh_attribute': attribute '{name}' ({why})"),
+        ));
+    }
+    Ok(Texture::VertexColor {
+        scale: t.float("scale")?.unwrap_or(1.0),
+    })
 }
 
 /// Mitsuba's `to_uv`: the 2D affine part of a 4x4 transform (x and y rows, translation).
@@ -109,6 +148,6 @@ pub(crate) fn scalar_use(ctx: &mut Ctx, i: u32) -> u32 {
             ctx.textures.push(swapped);
             (ctx.textures.len() - 1) as u32
         }
-        Texture::Bitmap { .. } => i,
+        Texture::Bitmap { .. } | Texture::VertexColor { .. } => i,
     }
 }
