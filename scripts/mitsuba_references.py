@@ -60,6 +60,22 @@ AREA_LIGHT = """
 """
 
 
+# The blend scenes' sphere (a blend of diffuse red and rough gold, its weight to follow) and
+# the start of their cube's blend (its weight and BSDFs to follow).
+BLEND_SPHERE = """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="blendbsdf">
+"""
+BLEND_CUBE = """            <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.2, 0.2"/></bsdf>
+            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
+        <bsdf type="blendbsdf">
+"""
+
+
 LOOK_AT_BOX = '<transform name="to_world"><lookat origin="0, 1, 3.4" target="0, 1, 0" up="0, 1, 0"/></transform>'
 SQUARE_FILM = f'<integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>'
 
@@ -438,24 +454,34 @@ SCENES = {
         "",
         CEILING
         + AREA_LIGHT
-        + """<shape type="sphere">
-        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
-        <bsdf type="blendbsdf">
-            <float name="weight" value="0.3"/>
-            <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.2, 0.2"/></bsdf>
-            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
-        </bsdf>
-    </shape>
-    <shape type="cube">
-        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
-        <bsdf type="blendbsdf">
-            <float name="weight" value="0.6"/>
+        + BLEND_SPHERE
+        + """            <float name="weight" value="0.3"/>
+"""
+        + BLEND_CUBE
+        + """            <float name="weight" value="0.6"/>
             <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>
             <bsdf type="blendbsdf">
                 <float name="weight" value="0.5"/>
                 <bsdf type="roughconductor"><float name="alpha" value="0.3"/><string name="material" value="Al"/></bsdf>
                 <bsdf type="roughplastic"><string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.1, 0.2, 0.7"/></bsdf>
             </bsdf>
+        </bsdf>
+    </shape>""",
+    ),
+    # Textured blend weights: a bitmap's luminance on a sphere (diffuse and rough gold), a
+    # checkerboard (read as a number, with Mitsuba's eval_1 quirk) on the cube.
+    "blendbsdf_texture": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + BLEND_SPHERE
+        + """            <texture type="bitmap" name="weight"><string name="filename" value="textures/stripes.png"/></texture>
+"""
+        + BLEND_CUBE
+        + """            <texture type="checkerboard" name="weight"><rgb name="color0" value="0.9"/><rgb name="color1" value="0.1"/>
+                <transform name="to_uv"><scale x="3" y="3"/></transform></texture>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>
+            <bsdf type="roughplastic"><string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.1, 0.2, 0.7"/></bsdf>
         </bsdf>
     </shape>""",
     ),

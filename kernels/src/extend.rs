@@ -371,7 +371,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let mut m = materials[t.material as usize];
                 let mut level = 0u32;
                 while level < 4 && m.blend != 0 {
-                    if uniform(key, 10 + level) < m.blend_weight {
+                    let mut weight = m.blend_weight;
+                    if m.blend_texture != 0 {
+                        let buv = hit_uv(tex_coords, t.original, h);
+                        weight = luminance(texture_eval(textures, m.blend_texture - 1, buv))
+                            .clamp(0.0, 1.0);
+                    }
+                    if uniform(key, 10 + level) < weight {
                         m = materials[(m.blend - 1) as usize];
                         level += 1;
                     } else {

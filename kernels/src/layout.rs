@@ -98,7 +98,9 @@ pub struct Material {
     pub perturb_texture: u32,
     /// Bump map: Mitsuba's `scale` of the height's gradient.
     pub bump_scale: f32,
-    pub pad4: u32,
+    /// Mitsuba `blendbsdf` with a textured weight: index + 1 of the header of the texture
+    /// whose luminance (clamped to [0, 1]) replaces `blend_weight`; else 0.
+    pub blend_texture: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.

@@ -88,6 +88,7 @@ impl GpuScene {
             m.texture.is_some()
                 || m.mask.is_some_and(|k| k.texture.is_some())
                 || m.perturb.is_some()
+                || m.blend.is_some_and(|b| b.texture.is_some())
         });
         let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
             (Some(uvs), true) => uvs

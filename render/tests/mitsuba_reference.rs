@@ -448,3 +448,8 @@ fn spot_and_projector_without_their_textures_fail() {
 fn vertex_colors_of_a_ply() {
     check("vertex_colors");
 }
+
+#[test]
+fn blend_bsdf_with_textured_weights() {
+    check("blendbsdf_texture");
+}

@@ -132,6 +132,9 @@ pub enum PerturbKind {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Blend {
     pub weight: f32,
+    /// Index into [`crate::Scene::textures`] of the texture whose luminance (clamped to
+    /// [0, 1]) is the weight per hit, in place of `weight`.
+    pub texture: Option<u32>,
     /// Index into [`crate::Scene::materials`] of the second BSDF's material (which carries
     /// the blend's emission, sidedness and mask too).
     pub other: u32,
@@ -376,10 +379,10 @@ impl Material {
             // Set by `Scene::gpu_materials`, which knows where the other materials are.
             blend: 0,
             blend_weight: 0.0,
+            blend_texture: 0,
             // Set by `Scene::gpu_materials`.
             perturb_texture: 0,
             bump_scale,
-            pad4: 0,
         }
     }
 }
@@ -404,7 +407,7 @@ impl Material {
 /// | 80 | `blend_weight: f32` | that probability |
 /// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
 /// | 88 | `bump_scale: f32` | bump map: Mitsuba's `scale` |
-/// | 92 | `pad4: u32` | zero |
+/// | 92 | `blend_texture: u32` | `blendbsdf` with a textured weight: index + 1 of its texture's header (its luminance, clamped, replaces `blend_weight`), else 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -423,7 +426,7 @@ pub struct GpuMaterial {
     pub blend_weight: f32,
     pub perturb_texture: u32,
     pub bump_scale: f32,
-    pub pad4: u32,
+    pub blend_texture: u32,
 }
 
 impl GpuMaterial {

@@ -218,6 +218,9 @@ impl Scene {
                 if let Some(b) = m.blend {
                     g.blend = b.other + 1;
                     g.blend_weight = b.weight;
+                    if let Some(t) = b.texture {
+                        g.blend_texture = starts[t as usize] + 1;
+                    }
                 }
                 g
             })

@@ -434,3 +434,36 @@ fn vertex_colors_are_read_as_mitsuba_reads_them() {
     .unwrap_err();
     assert!(e.message.contains("cannot be a mask's opacity"), "{e}");
 }
+
+/// `blendbsdf` weights given as textures: their luminance per hit (a checkerboard read as a
+/// number, as Mitsuba's `eval_1` reads it); a textured weight with the nested blend first,
+/// or a `mesh_attribute` weight, are errors.
+#[test]
+fn textured_blend_weights_are_read() {
+    let load = |bsdf: &str| {
+        load_mitsuba_str(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n{bsdf}\n</shape>\n</scene>"
+            ),
+            ".",
+        )
+    };
+    let s = load(r#"<bsdf type="blendbsdf"><texture type="checkerboard" name="weight"/><bsdf type="diffuse"/><bsdf type="roughplastic"/></bsdf>"#)
+        .unwrap()
+        .scene;
+    let b = s.materials.iter().find_map(|m| m.blend).expect("a blend");
+    let t = b.texture.expect("a textured weight");
+    // Read as a number, the checkerboard's colours swap (Mitsuba's eval_1).
+    assert!(
+        matches!(s.textures[t as usize], Texture::Checkerboard { color0, .. } if color0 == Vec3::splat(0.2))
+    );
+    let e = load(r#"<bsdf type="blendbsdf"><texture type="checkerboard" name="weight"/><bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf><bsdf type="diffuse"/></bsdf>"#)
+        .unwrap_err();
+    assert!(e.message.contains("nest the blend second"), "{e}");
+    let e = load(r#"<bsdf type="blendbsdf"><float name="weight" value="1.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#)
+        .unwrap_err();
+    assert!(
+        e.message.contains("must be in [0, 1]") && e.location.line_number() == Some(3),
+        "{e}"
+    );
+}

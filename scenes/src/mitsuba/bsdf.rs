@@ -39,8 +39,9 @@ pub(crate) struct ParsedBsdf {
     pub texture: Option<u32>,
     /// Mitsuba `mask` around it (`Material::mask`).
     pub mask: Option<Mask>,
-    /// Mitsuba `blendbsdf`: its weight and, in `Ctx::blend_parts`, its second BSDF.
-    pub blend: Option<(f32, u32)>,
+    /// Mitsuba `blendbsdf`: its weight (a number, or the texture whose luminance it is)
+    /// and, in `Ctx::blend_parts`, its second BSDF.
+    pub blend: Option<(f32, Option<u32>, u32)>,
     /// Mitsuba `normalmap` / `bumpmap` around it (`Material::perturb`).
     pub perturb: Option<Perturb>,
 }
@@ -503,23 +504,23 @@ fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
 }
 
 /// Mitsuba `blendbsdf`: two nested BSDFs, the second scattering with probability `weight`
-/// (a number, required as in Mitsuba). The first becomes the material; the second is kept in
-/// `Ctx::blend_parts` for the shape to register. A blend nested first is moved second
-/// (weight 1 - w); two nested blends are refused.
+/// (required as in Mitsuba: a number, or a texture whose luminance is read per hit, clamped
+/// to [0, 1]). The first becomes the material; the second is kept in `Ctx::blend_parts` for
+/// the shape to register. A blend nested first is moved second (weight 1 - w); two nested
+/// blends are refused.
 fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
-    if obj.has("weight") && obj.float("weight").is_err() {
-        return Err(syntax(
-            obj.loc_of("weight"),
-            "blendbsdf weight must be a number (textured weights are not supported)",
-        ));
-    }
-    let Some(weight) = obj.float("weight")? else {
+    let Some((colour, texture)) = ctx.color_or_texture(obj, "weight")? else {
         return Err(syntax(
             &obj.loc,
             "blendbsdf needs a 'weight' (as in Mitsuba)",
         ));
     };
-    if !(0.0..=1.0).contains(&weight) {
+    if let Some(i) = texture {
+        super::texture::image_only(ctx, i, obj.loc_of("weight"), "a blend's weight")?;
+    }
+    let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
+    let weight = crate::texture::luminance(colour);
+    if texture.is_none() && !(0.0..=1.0).contains(&weight) {
         return Err(syntax(
             obj.loc_of("weight"),
             "blendbsdf weight must be in [0, 1]",
@@ -542,6 +543,13 @@ fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> 
                 "a blendbsdf of two blendbsdfs is not supported; nest one of them only",
             ))
         }
+        (Some(_), None) if texture.is_some() => {
+            return Err(syntax(
+                &obj.loc,
+                "a blendbsdf with a textured weight and a nested blendbsdf first is not \
+                 supported; nest the blend second",
+            ))
+        }
         (Some(_), None) => (*second, *first, 1.0 - weight),
         _ => (*first, *second, weight),
     };
@@ -562,7 +570,7 @@ fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> 
     obj.finish(&mut ctx.diag)?;
     ctx.blend_parts.push(second);
     Ok(ParsedBsdf {
-        blend: Some((weight, (ctx.blend_parts.len() - 1) as u32)),
+        blend: Some((weight, texture, (ctx.blend_parts.len() - 1) as u32)),
         ..first
     })
 }

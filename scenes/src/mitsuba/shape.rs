@@ -315,7 +315,9 @@ fn add_placed<'a>(
             )
         })
     };
-    let blend_part = parsed.blend.map(|(_, part)| ctx.blend_parts[part as usize]);
+    let blend_part = parsed
+        .blend
+        .map(|(_, _, part)| ctx.blend_parts[part as usize]);
     if mesh.colors.is_none()
         && (reads_colors(&parsed) || blend_part.is_some_and(|b| reads_colors(&b)))
     {
@@ -416,7 +418,7 @@ fn register_material(
     parsed: ParsedBsdf,
     emission: Option<Vec3>,
 ) -> u32 {
-    let blend = parsed.blend.map(|(weight, part)| {
+    let blend = parsed.blend.map(|(weight, texture, part)| {
         let other = ParsedBsdf {
             two_sided: parsed.two_sided || ctx.blend_parts[part as usize].two_sided,
             mask: parsed.mask.or(ctx.blend_parts[part as usize].mask),
@@ -425,6 +427,7 @@ fn register_material(
         };
         crate::material::Blend {
             weight,
+            texture,
             other: register_material(ctx, builder, other, emission),
         }
     });
