@@ -287,10 +287,10 @@ fn broken_scenes_fail_cleanly() {
         ),
         (
             // A plugin Mitsuba has and the renderer does not (point lights are supported).
-            scene_file(&dir, "projector.xml", r#"<emitter type="projector"/>"#),
+            scene_file(&dir, "sunsky.xml", r#"<emitter type="sunsky"/>"#),
             vec![
-                "projector.xml:4",
-                "emitter 'projector'",
+                "sunsky.xml:4",
+                "emitter 'sunsky'",
                 "use --lenient to render without it",
             ],
         ),
@@ -432,7 +432,7 @@ fn lenient_renders_what_strict_refuses() {
     let scene = scene_file(
         &dir,
         "lenient.xml",
-        "<emitter type=\"projector\"/>\n<shape type=\"rectangle\"><bsdf type=\"principled\"><rgb name=\"base_color\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
+        "<emitter type=\"sunsky\"/>\n<shape type=\"rectangle\"><bsdf type=\"principled\"><rgb name=\"base_color\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
     );
     let (code, _, err) = render_scene(&dir, &scene, &[]);
     assert_eq!(code, 1, "{err}");
@@ -446,7 +446,7 @@ fn lenient_renders_what_strict_refuses() {
     let (code, _, err) = render_scene(&dir, &scene, &["--lenient"]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        err.contains("lenient.xml:4: warning: emitter 'projector' is not supported"),
+        err.contains("lenient.xml:4: warning: emitter 'sunsky' is not supported"),
         "{err}"
     );
     assert!(
