@@ -33,9 +33,9 @@ pub struct EnvironmentMap {
     pub to_world: Mat3,
 }
 
-/// Relative luminance of linear sRGB (Mitsuba's `luminance`).
+/// Mitsuba's luminance, in double precision for the sums below.
 fn luminance(c: Vec3) -> f64 {
-    (c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169) as f64
+    crate::texture::luminance(c) as f64
 }
 
 impl EnvironmentMap {
