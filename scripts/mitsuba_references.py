@@ -822,6 +822,84 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Principled: a checkered sphere with every reflection lobe (metallic, tinted specular,
+    # sheen, clearcoat, flatness) and an anisotropic metal-like cube whose `specular` sets eta.
+    "principled": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="principled">
+            <texture type="checkerboard" name="base_color">
+                <rgb name="color0" value="0.8, 0.2, 0.1"/><rgb name="color1" value="0.2, 0.4, 0.8"/>
+                <transform name="to_uv"><scale x="4" y="4"/></transform>
+            </texture>
+            <float name="roughness" value="0.4"/><float name="metallic" value="0.3"/>
+            <float name="spec_tint" value="0.5"/><float name="sheen" value="0.6"/>
+            <float name="sheen_tint" value="0.5"/><float name="clearcoat" value="0.7"/>
+            <float name="clearcoat_gloss" value="0.4"/><float name="flatness" value="0.3"/>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
+        <bsdf type="principled">
+            <rgb name="base_color" value="0.9, 0.7, 0.3"/>
+            <float name="roughness" value="0.35"/><float name="anisotropic" value="0.7"/>
+            <float name="metallic" value="0.8"/><float name="specular" value="0.7"/>
+        </bsdf>
+    </shape>""",
+    ),
+    # Principled with specular transmission: a glassy sphere (eta given) and a half
+    # transmitting, partly metallic cube (eta from `specular`): the back-side lobes too.
+    "principled_glass": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + '<emitter type="constant"><rgb name="radiance" value="0.15, 0.15, 0.2"/></emitter>'
+        + """<shape type="sphere">
+        <point name="center" value="-0.35, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="principled">
+            <rgb name="base_color" value="0.9, 0.8, 0.6"/>
+            <float name="spec_trans" value="0.85"/><float name="roughness" value="0.25"/>
+            <float name="eta" value="1.4"/><float name="clearcoat" value="0.3"/>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale x="0.3" y="0.3" z="0.08"/><rotate y="1" angle="-25"/><translate x="0.45" y="0.6" z="0.1"/></transform>
+        <bsdf type="principled">
+            <rgb name="base_color" value="0.3, 0.7, 0.5"/>
+            <float name="spec_trans" value="0.5"/><float name="metallic" value="0.2"/>
+            <float name="roughness" value="0.5"/><float name="spec_tint" value="0.3"/>
+        </bsdf>
+    </shape>""",
+    ),
+    # Principledthin: a translucent leaf-like sheet (diffuse and specular transmission)
+    # below the light, and a sphere with diffuse transmission. (Rough enough that the light
+    # seen through the sheet is no caustic: with a sharp transmission lobe the image is so
+    # heavy-tailed that Mitsuba's own renders fail this test at its budget now and then.)
+    "principledthin": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="rectangle">
+        <transform name="to_world"><scale x="0.45" y="0.3"/><rotate x="1" angle="-60"/><rotate y="1" angle="20"/><translate x="0.3" y="0.9" z="0.2"/></transform>
+        <bsdf type="principledthin">
+            <rgb name="base_color" value="0.3, 0.8, 0.2"/>
+            <float name="spec_trans" value="0.4"/><float name="diff_trans" value="0.8"/>
+            <float name="roughness" value="0.6"/><float name="eta" value="1.6"/>
+            <float name="sheen" value="0.4"/><float name="spec_tint" value="0.5"/>
+        </bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.3"/>
+        <bsdf type="principledthin">
+            <rgb name="base_color" value="0.8, 0.5, 0.3"/>
+            <float name="diff_trans" value="1.2"/><float name="flatness" value="0.5"/>
+            <float name="roughness" value="0.6"/>
+        </bsdf>
+    </shape>""",
+    ),
     "directional": scene(
         "",
         '<emitter type="directional"><vector name="direction" value="0.3, -1, -0.4"/>'

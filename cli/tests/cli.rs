@@ -432,7 +432,7 @@ fn lenient_renders_what_strict_refuses() {
     let scene = scene_file(
         &dir,
         "lenient.xml",
-        "<emitter type=\"sunsky\"/>\n<shape type=\"rectangle\"><bsdf type=\"principled\"><rgb name=\"base_color\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
+        "<emitter type=\"sunsky\"/>\n<shape type=\"rectangle\"><bsdf type=\"pplastic\"><rgb name=\"diffuse_reflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf></shape>\n<emitter type=\"constant\"/>",
     );
     let (code, _, err) = render_scene(&dir, &scene, &[]);
     assert_eq!(code, 1, "{err}");
@@ -450,7 +450,7 @@ fn lenient_renders_what_strict_refuses() {
         "{err}"
     );
     assert!(
-        err.contains("lenient.xml:5: warning: bsdf 'principled' is not supported")
+        err.contains("lenient.xml:5: warning: bsdf 'pplastic' is not supported")
             && err.contains("replaced by diffuse [0.2, 0.4, 0.6]"),
         "{err}"
     );

@@ -457,13 +457,21 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let plastic = m.kind == PLASTIC && (front || two_sided);
                 let rough_plastic = m.kind == ROUGH_PLASTIC && (front || two_sided);
                 let rough_dielectric = m.kind == ROUGH_DIELECTRIC;
+                // Mitsuba `principled` / `principledthin`: both sides scatter (the back
+                // as Mitsuba's BSDF does there, or as the front under `twosided`).
+                let principled = m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN;
                 // The rough dielectric's index ratio across the interface, far side over near.
                 let eta_rd = if front { m.param } else { 1.0 / m.param };
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse || glossy || plastic || rough_plastic || rough_dielectric)
+                    if (diffuse
+                        || glossy
+                        || plastic
+                        || rough_plastic
+                        || rough_dielectric
+                        || principled)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -556,6 +564,19 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 let tint = if e.z > 0.0 { m.color } else { m.transmittance };
                                 fc = tint * e.x;
                                 pdf_b = e.y;
+                            } else if principled {
+                                let fr = crate::principled::frame(
+                                    m, textures, tex_coords, t, ng, n, front,
+                                );
+                                let pp = crate::principled::params(textures, m, albedo);
+                                let e = crate::principled::eval_kind(
+                                    pp,
+                                    m.kind,
+                                    fr.transpose() * -d,
+                                    fr.transpose() * wi,
+                                );
+                                fc = e.truncate();
+                                pdf_b = e.w;
                             } else if rough_plastic {
                                 let fr = crate::sampling::frame(n);
                                 let wo = fr.transpose() * -d;
@@ -595,17 +616,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 mis_power(light_pdf, pdf_scatter) / light_pdf
                             };
                             ld = thr * fc * le * (weight * opacity * pw);
-                            // A transmitting BSDF's light sample leaves from the far side,
-                            // and stops where it stopped from the near side (short of the
-                            // light, which would otherwise block its own sample).
+                            // A transmitting BSDF's light sample leaves from the far side.
+                            // Towards a light at a finite distance it aims from there at the
+                            // point short of the light where the near side's ray stopped:
+                            // parallel to `wi` it could meet the light's own plane first
+                            // (seen at a slant, by twice the offset), and the light would
+                            // block its own sample.
                             let mut so = o;
                             let mut st = tmax;
+                            let mut sd = wi;
                             if wi.dot(ng_n) < 0.0 {
                                 so = offset_origin(p, -ng_n);
-                                st = (o + wi * tmax - so).dot(wi);
+                                if tmax < 1.0e30 {
+                                    let to_end = o + wi * tmax - so;
+                                    st = to_end.length();
+                                    sd = to_end / st;
+                                }
                             }
                             sh_o = so.extend(st);
-                            sh_d = wi;
+                            sh_d = sd;
                         }
                     }
                 }
@@ -714,6 +743,21 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         alive = true;
                         bsdf_pdf = e.y;
                         env_pdf = environment_pdf(f, textures, n, new_d);
+                    }
+                } else if principled {
+                    let fr = crate::principled::frame(m, textures, tex_coords, t, ng, n, front);
+                    let pp = crate::principled::params(textures, m, albedo);
+                    let wi_l = fr.transpose() * -d;
+                    let wl = crate::principled::sample_kind(pp, m.kind, wi_l, u, uniform(key, 4));
+                    if wl.dot(wl) > 0.0 {
+                        let e = crate::principled::eval_kind(pp, m.kind, wi_l, wl);
+                        if e.w > 0.0 {
+                            new_d = (fr * wl).normalize();
+                            thr = thr * e.truncate() / e.w;
+                            alive = true;
+                            bsdf_pdf = e.w;
+                            env_pdf = environment_pdf(f, textures, n, new_d);
+                        }
                     }
                 } else if m.kind == ROUGH_DIELECTRIC {
                     // Mitsuba `roughdielectric`: a microfacet normal seen from the ray's side,

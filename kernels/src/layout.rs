@@ -47,6 +47,11 @@ pub const ROUGH_PLASTIC: u32 = 5;
 /// Mitsuba `roughdielectric`: `color` specular reflectance, `transmittance` specular
 /// transmittance, `param` eta (int/ext), `conductor_k.x` alpha; `BECKMANN` flag.
 pub const ROUGH_DIELECTRIC: u32 = 6;
+/// Mitsuba `principled`: `color` base colour, `table` index + 1 of its parameter block in
+/// the texture array ([`Principled`] as `cohort_kernels::principled::params` reads it).
+pub const PRINCIPLED: u32 = 7;
+/// Mitsuba `principledthin`: as [`PRINCIPLED`].
+pub const PRINCIPLED_THIN: u32 = 8;
 /// `Material::flags` bits.
 pub const TWO_SIDED: u32 = 1;
 pub const EMITTER: u32 = 2;
@@ -101,6 +106,37 @@ pub struct Material {
     /// Mitsuba `blendbsdf` with a textured weight: index + 1 of the header of the texture
     /// whose luminance (clamped to [0, 1]) replaces `blend_weight`; else 0.
     pub blend_texture: u32,
+}
+
+/// The parameters of a Mitsuba `principled` or `principledthin` BSDF at a hit, named as
+/// Mitsuba names them (`cohort_kernels::principled`). The sampling rates: `principled`'s
+/// main specular, clearcoat and diffuse reflectance in `rate_a`..`rate_c`;
+/// `principledthin`'s specular reflectance, specular transmittance, diffuse transmittance
+/// and diffuse reflectance in `rate_a`..`rate_d`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Principled {
+    pub base_color: Vec3,
+    pub roughness: f32,
+    pub anisotropic: f32,
+    pub metallic: f32,
+    pub spec_trans: f32,
+    pub spec_tint: f32,
+    pub sheen: f32,
+    pub sheen_tint: f32,
+    pub clearcoat: f32,
+    pub clearcoat_gloss: f32,
+    pub flatness: f32,
+    /// `principledthin` only, as Mitsuba reads it (0..2).
+    pub diff_trans: f32,
+    /// `principled`: the relative index (from `eta` or `specular`); `principledthin`: the
+    /// film's `eta`.
+    pub eta: f32,
+    pub rate_a: f32,
+    pub rate_b: f32,
+    pub rate_c: f32,
+    pub rate_d: f32,
+    pub pad: u32,
 }
 
 /// What every kernel of a frame reads: camera, image, budget and the frame's seed.

@@ -24,6 +24,7 @@ pub mod layout;
 pub mod light;
 pub mod path_end;
 pub mod perturb;
+pub mod principled;
 pub mod rng;
 pub mod rough_dielectric;
 pub mod rough_plastic;

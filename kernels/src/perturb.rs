@@ -36,6 +36,21 @@ pub fn surface_tangents(v0: Vec3, v1: Vec3, v2: Vec3, uv01: Vec4, uv2: Vec2, ng:
     r
 }
 
+/// [`surface_tangents`] of triangle `tri` (scene index `original`) with its corners'
+/// texture coordinates from `tex_coords` (`cohort_kernels::texture::hit_uv`'s layout).
+#[kernel_fn]
+pub fn hit_tangents(tex_coords: &[Vec4], original: u32, tri: Triangle, ng: Vec3) -> Mat3 {
+    let k = original as usize * 2;
+    surface_tangents(
+        tri.v0,
+        tri.v1,
+        tri.v2,
+        tex_coords[k],
+        tex_coords[k + 1].truncate().truncate(),
+        ng,
+    )
+}
+
 /// Mitsuba's shading tangent: dp/du made orthogonal to the shading normal `ns` (any tangent
 /// where dp/du vanishes or is parallel to `ns`).
 #[kernel_fn]
@@ -139,15 +154,7 @@ pub fn perturb_normal(
     wi: Vec3,
     front: bool,
 ) -> Vec4 {
-    let k = original as usize * 2;
-    let tg = surface_tangents(
-        tri.v0,
-        tri.v1,
-        tri.v2,
-        tex_coords[k],
-        tex_coords[k + 1].truncate().truncate(),
-        ng,
-    );
+    let tg = hit_tangents(tex_coords, original, tri, ng);
     let s = shading_tangent(tg.x_axis, ns);
     let t = ns.cross(s);
     let header = m.perturb_texture - 1;

@@ -89,6 +89,8 @@ impl GpuScene {
                 || m.mask.is_some_and(|k| k.texture.is_some())
                 || m.perturb.is_some()
                 || m.blend.is_some_and(|b| b.texture.is_some())
+                // An anisotropic principled BSDF turns with dp/du.
+                || matches!(m.bsdf, cohort_scenes::Bsdf::Principled(p) if p.anisotropic != 0.0)
         });
         let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
             (Some(uvs), true) => uvs

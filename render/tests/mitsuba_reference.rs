@@ -453,3 +453,42 @@ fn vertex_colors_of_a_ply() {
 fn blend_bsdf_with_textured_weights() {
     check("blendbsdf_texture");
 }
+
+#[test]
+fn principled_every_reflection_lobe_textured_and_anisotropic() {
+    check("principled");
+}
+
+#[test]
+fn principled_specular_transmission_both_sides() {
+    check("principled_glass");
+}
+
+#[test]
+fn principledthin_specular_and_diffuse_transmission() {
+    check("principledthin");
+}
+
+/// The lobes matter at this budget: the principled scene without its metallic, tinted
+/// specular, sheen and clearcoat lobes fails the test, and the glass without its
+/// transmission.
+#[test]
+fn principled_without_its_lobes_fails() {
+    assert_fails("principled", |scene| {
+        for m in &mut scene.materials {
+            if let cohort_scenes::Bsdf::Principled(params) = &mut m.bsdf {
+                params.metallic = 0.0;
+                params.spec_tint = 0.0;
+                params.sheen = 0.0;
+                params.clearcoat = 0.0;
+            }
+        }
+    });
+    assert_fails("principled_glass", |scene| {
+        for m in &mut scene.materials {
+            if let cohort_scenes::Bsdf::Principled(params) = &mut m.bsdf {
+                params.spec_trans = 0.0;
+            }
+        }
+    });
+}

@@ -67,6 +67,60 @@ pub enum Bsdf {
         internal_reflectance: f32,
         table: u32,
     },
+    /// Mitsuba `principled` or `principledthin` (`cohort_kernels::principled`). Its
+    /// parameters reach the kernels as a block of the scene's texture array
+    /// ([`Principled::gpu_block`], placed by `Scene::gpu_textures`).
+    Principled(Principled),
+}
+
+/// The parameters of a Mitsuba `principled` / `principledthin` BSDF, as Mitsuba reads
+/// them (`eta` already derived from `specular` where that was given).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Principled {
+    pub thin: bool,
+    pub base_color: Vec3,
+    pub roughness: f32,
+    pub anisotropic: f32,
+    pub metallic: f32,
+    pub spec_trans: f32,
+    pub spec_tint: f32,
+    pub sheen: f32,
+    pub sheen_tint: f32,
+    pub clearcoat: f32,
+    pub clearcoat_gloss: f32,
+    pub flatness: f32,
+    pub diff_trans: f32,
+    pub eta: f32,
+    /// `principled`: main specular, clearcoat, diffuse reflectance, unused;
+    /// `principledthin`: specular reflectance, specular transmittance, diffuse
+    /// transmittance, diffuse reflectance.
+    pub sampling_rates: [f32; 4],
+}
+
+impl Principled {
+    /// The parameter block the kernels read (`cohort_kernels::principled::params`):
+    /// [`Principled::GPU_BLOCK`] entries of the texture array.
+    pub fn gpu_block(&self) -> [[f32; 4]; Principled::GPU_BLOCK] {
+        let r = self.sampling_rates;
+        [
+            [
+                self.roughness,
+                self.anisotropic,
+                self.metallic,
+                self.spec_trans,
+            ],
+            [self.spec_tint, self.sheen, self.sheen_tint, self.clearcoat],
+            [
+                self.clearcoat_gloss,
+                self.flatness,
+                self.diff_trans,
+                self.eta,
+            ],
+            [r[0], r[1], r[2], r[3]],
+        ]
+    }
+
+    pub const GPU_BLOCK: usize = 4;
 }
 
 /// A microfacet normal distribution (Mitsuba's `distribution`).
@@ -334,6 +388,14 @@ impl Material {
                     eta,
                 )
             }
+            Bsdf::Principled(params) => {
+                let kind = if params.thin {
+                    GpuMaterial::PRINCIPLED_THIN
+                } else {
+                    GpuMaterial::PRINCIPLED
+                };
+                (kind, params.base_color, Vec3::ZERO, params.eta)
+            }
         };
         if self.two_sided {
             flags |= GpuMaterial::FLAG_TWO_SIDED;
@@ -393,7 +455,7 @@ impl Material {
 /// | offset | field | meaning |
 /// |---|---|---|
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
-/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6 |
+/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6, `PRINCIPLED` 7, `PRINCIPLED_THIN` 8 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
 /// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked, bit 5 normal map, bit 6 bump map, bit 7 no shadowing term, bit 8 no flip of invalid normals, bit 9 perturbation per side (`Perturb`) |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
@@ -402,7 +464,7 @@ impl Material {
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
-/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture), else 0 |
+/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); else 0 |
 /// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
 /// | 80 | `blend_weight: f32` | that probability |
 /// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
@@ -437,6 +499,8 @@ impl GpuMaterial {
     pub const PLASTIC: u32 = 4;
     pub const ROUGH_PLASTIC: u32 = 5;
     pub const ROUGH_DIELECTRIC: u32 = 6;
+    pub const PRINCIPLED: u32 = 7;
+    pub const PRINCIPLED_THIN: u32 = 8;
     pub const FLAG_TWO_SIDED: u32 = 1;
     pub const FLAG_EMITTER: u32 = 2;
     pub const FLAG_NONLINEAR: u32 = 4;

@@ -199,6 +199,7 @@ impl Scene {
     /// [`Scene::gpu_textures`] (`texture` = header index + 1, 0 without a texture).
     pub fn gpu_materials(&self) -> Vec<crate::GpuMaterial> {
         let starts = crate::texture::gpu_texture_starts(&self.textures);
+        let mut principled_at = self.gpu_principled_start();
         self.materials
             .iter()
             .map(|m| {
@@ -212,8 +213,15 @@ impl Scene {
                 if let Some(p) = m.perturb {
                     g.perturb_texture = starts[p.texture as usize] + 1;
                 }
-                if let crate::Bsdf::RoughPlastic { table, .. } = m.bsdf {
-                    g.table = starts[table as usize] + 1;
+                match m.bsdf {
+                    crate::Bsdf::RoughPlastic { table, .. } => {
+                        g.table = starts[table as usize] + 1;
+                    }
+                    crate::Bsdf::Principled(_) => {
+                        g.table = principled_at + 1;
+                        principled_at += crate::Principled::GPU_BLOCK as u32;
+                    }
+                    _ => {}
                 }
                 if let Some(b) = m.blend {
                     g.blend = b.other + 1;
@@ -228,11 +236,18 @@ impl Scene {
     }
 
     /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`), then
-    /// the environment map's (`EnvironmentMap::gpu_layout`), if any.
+    /// the meshes' vertex colours if a texture reads them, the parameter blocks of the
+    /// principled materials (in material order), and the environment map's
+    /// (`EnvironmentMap::gpu_layout`), if any.
     pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
         let mut data = crate::texture::gpu_textures(&self.textures).0;
         if crate::texture::uses_vertex_colors(&self.textures) {
             data.extend(self.gpu_vertex_colors());
+        }
+        for m in &self.materials {
+            if let crate::Bsdf::Principled(p) = m.bsdf {
+                data.extend(p.gpu_block());
+            }
         }
         if let Some(map) = &self.environment_map {
             data.extend(map.gpu_layout());
@@ -240,15 +255,25 @@ impl Scene {
         data
     }
 
+    /// Where the principled materials' parameter blocks start in [`Scene::gpu_textures`].
+    fn gpu_principled_start(&self) -> u32 {
+        let mut at = crate::texture::gpu_textures_len(&self.textures);
+        if crate::texture::uses_vertex_colors(&self.textures) {
+            at += 3 * self.triangles.len() as u32;
+        }
+        at
+    }
+
     /// Where the environment map starts in [`Scene::gpu_textures`], plus one (0: no map).
     pub fn gpu_environment_map(&self) -> u32 {
         match &self.environment_map {
             Some(_) => {
-                let mut at = crate::texture::gpu_textures_len(&self.textures) + 1;
-                if crate::texture::uses_vertex_colors(&self.textures) {
-                    at += 3 * self.triangles.len() as u32;
-                }
-                at
+                let blocks = self
+                    .materials
+                    .iter()
+                    .filter(|m| matches!(m.bsdf, crate::Bsdf::Principled(_)))
+                    .count();
+                self.gpu_principled_start() + (blocks * crate::Principled::GPU_BLOCK) as u32 + 1
             }
             None => 0,
         }

@@ -266,7 +266,7 @@ fn unsupported_features_warn_with_file_and_line() {
         r#"
     <shape type="sdfgrid"/>
     <shape type="rectangle">
-        <bsdf type="principled"><rgb name="base_color" value="0.2, 0.4, 0.6"/></bsdf>
+        <bsdf type="pplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf>
     </shape>
     <shape type="rectangle">
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
@@ -297,12 +297,12 @@ fn unsupported_features_warn_with_file_and_line() {
         );
     };
     warned_at(r#"type="sdfgrid""#, "shape 'sdfgrid' is not supported");
-    warned_at(r#"type="principled""#, "bsdf 'principled' is not supported");
+    warned_at(r#"type="pplastic""#, "bsdf 'pplastic' is not supported");
     warned_at("roughness", "'roughness'");
     warned_at("sunsky", "emitter 'sunsky' is not supported");
     warned_at("roughconductor", "anisotropic");
     warned_at("<wibble/>", "<wibble>");
-    // The stand-in for principled keeps its colour.
+    // The stand-in for pplastic keeps its colour.
     let s = &loaded.scene;
     assert!(s.materials.iter().any(|m| m.bsdf
         == Bsdf::Diffuse {
@@ -580,5 +580,68 @@ fn garbage_never_panics() {
         "<scene><sensor type=\"perspective\"><float name=\"fov\" value=\"1e40\"/></sensor></scene>",
     ] {
         let _ = load_mitsuba_str(xml, &dir);
+    }
+}
+
+/// `principled` and `principledthin` read as Mitsuba reads them: its defaults, `eta` from
+/// `specular`, and errors at the line for what it refuses or the renderer cannot take.
+#[test]
+fn principled_parameters_defaults_and_errors() {
+    let principled = |bsdf: &str| {
+        let loaded = load_str(&scene(&format!("<shape type=\"rectangle\">{bsdf}</shape>")));
+        match loaded.scene.materials.last().unwrap().bsdf {
+            Bsdf::Principled(p) => p,
+            other => panic!("{other:?}"),
+        }
+    };
+    let p = principled(r#"<bsdf type="principled"/>"#);
+    assert!(!p.thin);
+    assert_eq!(p.base_color, Vec3::splat(0.5));
+    assert_eq!((p.roughness, p.metallic, p.spec_trans), (0.5, 0.0, 0.0));
+    // specular 0.5: eta = 2 / (1 - sqrt(0.04)) - 1 = 1.5.
+    assert!((p.eta - 1.5).abs() < 1e-6);
+    assert_eq!(p.sampling_rates, [1.0, 1.0, 1.0, 0.0]);
+    let p = principled(
+        r#"<bsdf type="principled"><float name="specular" value="0.7"/><float name="clearcoat" value="0.3"/><float name="main_specular_sampling_rate" value="2"/></bsdf>"#,
+    );
+    assert!((p.eta - (2.0 / (1.0 - (0.08f32 * 0.7).sqrt()) - 1.0)).abs() < 1e-6);
+    assert_eq!((p.clearcoat, p.sampling_rates[0]), (0.3, 2.0));
+    // Transmission needs an interface: eta 1 becomes 1.001, as in Mitsuba.
+    let p = principled(
+        r#"<bsdf type="principled"><float name="eta" value="1"/><float name="spec_trans" value="0.5"/></bsdf>"#,
+    );
+    assert_eq!(p.eta, 1.001);
+    let p =
+        principled(r#"<bsdf type="principledthin"><float name="diff_trans" value="1.5"/></bsdf>"#);
+    assert!(p.thin);
+    assert_eq!((p.diff_trans, p.eta, p.metallic), (1.5, 1.5, 0.0));
+
+    let dir = tmp_dir("principled");
+    for (bsdf, needle, message) in [
+        (
+            r#"<bsdf type="principled"><float name="eta" value="1.4"/><float name="specular" value="0.5"/></bsdf>"#,
+            "specular",
+            "either 'eta' or 'specular'",
+        ),
+        (
+            r#"<bsdf type="principled"><float name="metallic" value="1.5"/></bsdf>"#,
+            "metallic",
+            "'metallic' must lie in [0, 1]",
+        ),
+        (
+            r#"<bsdf type="principled"><texture type="bitmap" name="roughness"><string name="filename" value="r.png"/></texture></bsdf>"#,
+            "texture",
+            "a texture for 'roughness' is not supported",
+        ),
+        (
+            r#"<bsdf type="principledthin"><float name="clearcoat" value="0.5"/></bsdf>"#,
+            "clearcoat",
+            "'clearcoat'",
+        ),
+    ] {
+        let xml = scene(&format!("<shape type=\"rectangle\">\n{bsdf}\n</shape>"));
+        let e = error_of(&xml, &dir).to_string();
+        assert!(e.contains(message), "{e}");
+        assert!(e.contains(&format!(":{}", line_of(&xml, needle))), "{e}");
     }
 }

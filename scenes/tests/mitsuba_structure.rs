@@ -624,8 +624,8 @@ fn unsupported_plugins_strict_and_lenient() {
         ),
         (r#"<emitter type="sunsky"/>"#, "emitter 'sunsky'", "skipped"),
         (
-            r#"<shape type="rectangle"><bsdf type="principled"><rgb name="base_color" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
-            "bsdf 'principled'",
+            r#"<shape type="rectangle"><bsdf type="pplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/></bsdf></shape>"#,
+            "bsdf 'pplastic'",
             "diffuse [0.2, 0.4, 0.6]",
         ),
         (

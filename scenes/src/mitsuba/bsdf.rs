@@ -1,6 +1,6 @@
 //! Mitsuba `<bsdf>` plugins → [`Bsdf`]. Supported: diffuse, conductor, roughconductor,
-//! dielectric, roughdielectric, plastic, roughplastic, mask, twosided, blendbsdf, normalmap,
-//! bumpmap (each parameter read or reported). Other plugins are errors, or under
+//! dielectric, roughdielectric, plastic, roughplastic, principled, principledthin, mask,
+//! twosided, blendbsdf, normalmap, bumpmap (each parameter read or reported). Other plugins are errors, or under
 //! `--lenient` replaced by the nearest supported BSDF with a warning saying which.
 
 use glam::Vec3;
@@ -28,6 +28,8 @@ pub(crate) const SUPPORTED: &[&str] = &[
     "blendbsdf",
     "normalmap",
     "bumpmap",
+    "principled",
+    "principledthin",
 ];
 
 /// A BSDF as the shape will use it.
@@ -298,6 +300,12 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         }
         "roughplastic" => {
             let (b, t) = rough_plastic(ctx, obj)?;
+            texture = t;
+            b
+        }
+        "principled" | "principledthin" => {
+            let thin = obj.plugin == "principledthin";
+            let (b, t) = super::principled::principled(ctx, obj, thin)?;
             texture = t;
             b
         }

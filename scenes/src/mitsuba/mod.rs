@@ -21,6 +21,7 @@ mod conductor_iors;
 mod diag;
 mod emitter;
 mod plugins;
+mod principled;
 mod props;
 mod shape;
 mod spectrum;

@@ -1,0 +1,660 @@
+//! Mitsuba `principled` and `principledthin` (Disney's principled BSDF as Mitsuba 3.9
+//! defines it: `principled.cpp`, `principledthin.cpp`, `principledhelpers.h`).
+//!
+//! Everything here is in the shading frame (z the shading normal), with `wi` pointing
+//! towards the viewer and `wo` the other direction, as in Mitsuba. The functions follow
+//! Mitsuba's arithmetic step by step, quirks included, because the image must match its
+//! expectation: `principled` picks its lobe with probabilities from the Fresnel factor of
+//! the specular normal drawn with the same 2D sample that then places the diffuse or
+//! clearcoat direction, and weighs the sample by `eval / pdf` where `pdf` uses the Fresnel
+//! factor of the half vector. So the warps are Mitsuba's too: its GGX visible-normal
+//! sampling (`sample_visible_11`) and its concentric cosine hemisphere.
+//!
+//! Transmission omits Mitsuba's radiance scale 1 / eta², as `rough_dielectric` does.
+
+use crate::layout::*;
+use crate::sampling::{concentric_disk, fresnel_dielectric};
+use crate::texture::luminance;
+use cohort::prelude::*;
+
+const INV_PI: f32 = core::f32::consts::FRAC_1_PI;
+
+/// The parameters of material `m` (kind `PRINCIPLED` or `PRINCIPLED_THIN`) with base
+/// colour `base_color`: its parameter block (`m.table`), laid out by
+/// `cohort_scenes::Principled::gpu_block`.
+#[kernel_fn]
+pub fn params(textures: &[Vec4], m: Material, base_color: Vec3) -> Principled {
+    let at = (m.table - 1) as usize;
+    let a = textures[at];
+    let b = textures[at + 1];
+    let c = textures[at + 2];
+    let r = textures[at + 3];
+    Principled {
+        base_color,
+        roughness: a.x,
+        anisotropic: a.y,
+        metallic: a.z,
+        spec_trans: a.w,
+        spec_tint: b.x,
+        sheen: b.y,
+        sheen_tint: b.z,
+        clearcoat: b.w,
+        clearcoat_gloss: c.x,
+        flatness: c.y,
+        diff_trans: c.z,
+        eta: c.w,
+        rate_a: r.x,
+        rate_b: r.y,
+        rate_c: r.z,
+        rate_d: r.w,
+        pad: 0,
+    }
+}
+
+/// Schlick's weight (1 - cos)^5, with 1 - cos clamped to [0, 1].
+#[kernel_fn]
+pub fn schlick_weight(cos: f32) -> f32 {
+    let m = (1.0 - cos).clamp(0.0, 1.0);
+    m * m * m * m * m
+}
+
+/// Mitsuba's `calc_schlick`: Schlick's Fresnel from `r0` at microfacet cosine `cos_i`
+/// (negative: from inside), using the transmitted angle where the light leaves a denser
+/// medium.
+#[kernel_fn]
+pub fn schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
+    let mut eta_it = eta;
+    if cos_i < 0.0 {
+        eta_it = 1.0 / eta;
+    }
+    let eta_ti = 1.0 / eta_it;
+    let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * (eta_ti * eta_ti);
+    let mut w = schlick_weight(cos_i.abs());
+    if eta_it <= 1.0 {
+        w = schlick_weight(cos_t2.max(0.0).sqrt());
+    }
+    r0 + (Vec3::ONE - r0) * w
+}
+
+/// Schlick's reflectance at normal incidence for relative index `eta`.
+#[kernel_fn]
+pub fn schlick_r0(eta: f32) -> f32 {
+    let r = (eta - 1.0) / (eta + 1.0);
+    r * r
+}
+
+/// Mitsuba's `fresnel` reflectance for a signed cosine `cos_i` (negative: arriving from
+/// inside, where the index ratio inverts) at relative index `eta`.
+#[kernel_fn]
+pub fn fresnel_signed(cos_i: f32, eta: f32) -> f32 {
+    let mut f = 0.0f32;
+    if eta != 1.0 {
+        if cos_i >= 0.0 {
+            f = fresnel_dielectric(cos_i, eta);
+        } else {
+            f = fresnel_dielectric(-cos_i, 1.0 / eta);
+        }
+    }
+    f
+}
+
+/// Mitsuba's `calc_dist_params`: GGX (alpha_x, alpha_y) from roughness and anisotropy.
+#[kernel_fn]
+pub fn dist_alpha(roughness: f32, anisotropic: f32) -> Vec2 {
+    let r2 = roughness * roughness;
+    let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+    Vec2::new((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+}
+
+/// Anisotropic GGX D(m), zero where D cos θ_m is below 1e-20 (as Mitsuba).
+#[kernel_fn]
+pub fn ggx_d(m: Vec3, a: Vec2) -> f32 {
+    let x = m.x / a.x;
+    let y = m.y / a.y;
+    let t = x * x + y * y + m.z * m.z;
+    let d = 1.0 / (core::f32::consts::PI * a.x * a.y * t * t);
+    let mut r = 0.0f32;
+    if d * m.z > 1.0e-20 {
+        r = d;
+    }
+    r
+}
+
+/// Smith's masking of direction `v` for microfacet `m` (anisotropic GGX): zero where `v`
+/// sees the microfacet's back.
+#[kernel_fn]
+pub fn ggx_g1(v: Vec3, m: Vec3, a: Vec2) -> f32 {
+    let ax = a.x * v.x;
+    let ay = a.y * v.y;
+    let xy = ax * ax + ay * ay;
+    let mut g = 2.0 / (1.0 + (1.0 + xy / (v.z * v.z)).sqrt());
+    if xy == 0.0 {
+        g = 1.0;
+    }
+    if v.dot(m) * v.z <= 0.0 {
+        g = 0.0;
+    }
+    g
+}
+
+/// The density of visible normal `m` for a viewer at `wi` (z > 0): D G1 |wi·m| / wi.z.
+#[kernel_fn]
+pub fn visible_pdf(wi: Vec3, m: Vec3, a: Vec2) -> f32 {
+    ggx_d(m, a) * ggx_g1(wi, m, a) * wi.dot(m).abs() / wi.z
+}
+
+/// A GGX normal visible from `wi` (z > 0), by Mitsuba's mapping of `u`: the viewer
+/// stretched to roughness 1, `sample_visible_11`'s slope, rotated back and unstretched.
+#[kernel_fn]
+pub fn visible_sample(wi: Vec3, a: Vec2, u: Vec2) -> Vec3 {
+    let wp = Vec3::new(a.x * wi.x, a.y * wi.y, wi.z).normalize();
+    let sin2 = 1.0 - wp.z * wp.z;
+    let mut cos_phi = 1.0f32;
+    let mut sin_phi = 0.0f32;
+    // Mitsuba's 4 x drjit's epsilon (2^-24).
+    if sin2.abs() > 2.384_185_8e-7 {
+        let inv = 1.0 / sin2.sqrt();
+        cos_phi = (wp.x * inv).clamp(-1.0, 1.0);
+        sin_phi = (wp.y * inv).clamp(-1.0, 1.0);
+    }
+    let cos_theta = wp.z;
+    let p = concentric_disk(u);
+    let s = 0.5 * (1.0 + cos_theta);
+    let x = p.x;
+    let y = (1.0 - x * x).max(0.0).sqrt() * (1.0 - s) + p.y * s;
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let norm = 1.0 / (sin_theta * y + cos_theta * z);
+    let slope_x = (cos_theta * y - sin_theta * z) * norm;
+    let slope_y = x * norm;
+    let sx = (cos_phi * slope_x - sin_phi * slope_y) * a.x;
+    let sy = (sin_phi * slope_x + cos_phi * slope_y) * a.y;
+    Vec3::new(-sx, -sy, 1.0).normalize()
+}
+
+/// Mitsuba's cosine-weighted hemisphere (through the concentric disk).
+#[kernel_fn]
+pub fn cosine_concentric(u: Vec2) -> Vec3 {
+    let p = concentric_disk(u);
+    Vec3::new(p.x, p.y, (1.0 - p.x * p.x - p.y * p.y).max(0.0).sqrt())
+}
+
+/// The clearcoat's GTR1 distribution D(m) of roughness `alpha`.
+#[kernel_fn]
+pub fn gtr1_d(m: Vec3, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = (a2 - 1.0) / (core::f32::consts::PI * a2.ln() * (1.0 + (a2 - 1.0) * m.z * m.z));
+    let mut r = 0.0f32;
+    if d * m.z > 1.0e-20 {
+        r = d;
+    }
+    r
+}
+
+/// A GTR1 normal drawn with density D(m) cos θ_m.
+#[kernel_fn]
+pub fn gtr1_sample(alpha: f32, u: Vec2) -> Vec3 {
+    let phi = 2.0 * core::f32::consts::PI * u.x;
+    let a2 = alpha * alpha;
+    let cos2 = (1.0 - a2.powf(1.0 - u.y)) / (1.0 - a2);
+    let sin = (1.0 - cos2).max(0.0).sqrt();
+    let cos = cos2.max(0.0).sqrt();
+    Vec3::new(phi.cos() * sin, phi.sin() * sin, cos)
+}
+
+/// The clearcoat's separable masking term for one direction (`smith_ggx1`).
+#[kernel_fn]
+pub fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
+    let c = v.z.abs();
+    let tan2 = (1.0 - c * c) / (c * c);
+    let mut g = 2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt());
+    if v.z == 1.0 {
+        g = 1.0;
+    }
+    if v.dot(m) * v.z <= 0.0 {
+        g = 0.0;
+    }
+    g
+}
+
+/// Mitsuba's `mac_mic_compatibility`: both directions see the microfacet `m` (turned to
+/// the viewer's side of the surface, `ci` the viewer's cosine) from its front, or for
+/// refraction `wo` from its back.
+#[kernel_fn]
+pub fn compatible(m: Vec3, wi: Vec3, wo: Vec3, ci: f32, reflection: bool) -> bool {
+    let mut s = m;
+    if ci < 0.0 {
+        s = -m;
+    }
+    let o = wo.dot(s);
+    wi.dot(s) > 0.0 && ((reflection && o > 0.0) || (!reflection && o < 0.0))
+}
+
+/// `reflect` of Mitsuba: `wi` mirrored about `m`.
+#[kernel_fn]
+pub fn reflect(wi: Vec3, m: Vec3) -> Vec3 {
+    m * (2.0 * wi.dot(m)) - wi
+}
+
+/// The colour tint of the base colour (itself over its luminance; white where black).
+#[kernel_fn]
+pub fn tint(base: Vec3) -> Vec3 {
+    let lum = luminance(base);
+    let mut c = Vec3::ONE;
+    if lum > 0.0 {
+        c = base / lum;
+    }
+    c
+}
+
+/// Mitsuba's `principled_fresnel`: on the front, the dielectric Fresnel factor `f` blended
+/// with Schlick's metallic and tinted responses; on the back, `bsdf` times `f`.
+#[kernel_fn]
+pub fn principled_fresnel(p: Principled, f: f32, cos_i: f32, front: bool, bsdf: f32) -> Vec3 {
+    let mut r = Vec3::splat(bsdf * f);
+    if front {
+        let mut eta_it = p.eta;
+        if cos_i < 0.0 {
+            eta_it = 1.0 / p.eta;
+        }
+        let mut fs = Vec3::ZERO;
+        if p.metallic != 0.0 {
+            fs += schlick(p.base_color, cos_i, p.eta) * p.metallic;
+        }
+        if p.spec_tint != 0.0 {
+            let f0 = tint(p.base_color) * schlick_r0(eta_it);
+            fs += schlick(f0, cos_i, p.eta) * ((1.0 - p.metallic) * p.spec_tint);
+        }
+        r = Vec3::splat((1.0 - p.metallic) * (1.0 - p.spec_tint) * f) + fs;
+    }
+    r
+}
+
+/// The diffuse lobes' shape (Burley's diffuse and retro-reflection, blended towards the
+/// fake subsurface term by `flatness`) for cosines `ci`, `co` and half-vector cosine `cd`.
+#[kernel_fn]
+pub fn diffuse_shape(p: Principled, ci: f32, co: f32, cd: f32) -> f32 {
+    let fo = schlick_weight(co.abs());
+    let fi = schlick_weight(ci.abs());
+    let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+    let rr = 2.0 * p.roughness * cd * cd;
+    let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+    let mut shape = f_diff + f_retro;
+    if p.flatness != 0.0 {
+        let fss90 = rr / 2.0;
+        let fss = (1.0 - fo + fss90 * fo) * (1.0 - fi + fss90 * fi);
+        let f_ss = 1.25 * (fss * (1.0 / (co.abs() + ci.abs()) - 0.5) + 0.5);
+        shape = shape * (1.0 - p.flatness) + f_ss * p.flatness;
+    }
+    shape
+}
+
+/// The sheen lobe's colour for half-vector cosine `cd` (without the weights).
+#[kernel_fn]
+pub fn sheen_color(p: Principled, cd: f32) -> Vec3 {
+    let mut c = Vec3::ONE;
+    if p.sheen_tint != 0.0 {
+        c = Vec3::ONE * (1.0 - p.sheen_tint) + tint(p.base_color) * p.sheen_tint;
+    }
+    c * schlick_weight(cd.abs())
+}
+
+/// `principled`'s lobe probabilities for specular Fresnel factor `f`: x diffuse,
+/// y clearcoat, z specular transmission (specular reflection takes the rest), normalised.
+#[kernel_fn]
+pub fn lobe_probabilities(p: Principled, f: f32, front: bool) -> Vec3 {
+    let brdf = (1.0 - p.metallic) * (1.0 - p.spec_trans);
+    let bsdf = (1.0 - p.metallic) * p.spec_trans;
+    let mut reflect = f;
+    let mut trans = 0.0f32;
+    let mut clearcoat = 0.0f32;
+    let mut diffuse = 0.0f32;
+    if front {
+        reflect = p.rate_a * (1.0 - bsdf * (1.0 - f));
+        clearcoat = 0.25 * p.clearcoat * p.rate_b;
+        diffuse = brdf * p.rate_c;
+    }
+    if p.spec_trans != 0.0 {
+        trans = 1.0 - f;
+        if front {
+            trans = p.rate_a * bsdf * (1.0 - f);
+        }
+    }
+    let total = reflect + trans + clearcoat + diffuse;
+    let mut r = Vec3::ZERO;
+    if total > 0.0 {
+        r = Vec3::new(diffuse, clearcoat, trans) / total;
+    }
+    r
+}
+
+/// `principled`: xyz = f·|cos| for directions `wi`, `wo`, w = the density with which
+/// [`sample`] draws `wo` by Mitsuba's `pdf`.
+#[kernel_fn]
+pub fn eval(p: Principled, wi: Vec3, wo: Vec3) -> Vec4 {
+    let ci = wi.z;
+    let mut value = Vec3::ZERO;
+    let mut pdf = 0.0f32;
+    if ci != 0.0 {
+        let brdf = (1.0 - p.metallic) * (1.0 - p.spec_trans);
+        let bsdf = (1.0 - p.metallic) * p.spec_trans;
+        let co = wo.z;
+        let reflect = ci * co > 0.0;
+        let refract = ci * co < 0.0;
+        let front = ci > 0.0;
+        let mut eta_path = p.eta;
+        if !front {
+            eta_path = 1.0 / p.eta;
+        }
+        let a = dist_alpha(p.roughness, p.anisotropic);
+        let mut k = 1.0f32;
+        if !reflect {
+            k = eta_path;
+        }
+        let mut wh = (wi + wo * k).normalize();
+        if wh.z < 0.0 {
+            wh = -wh;
+        }
+        let cih = wi.dot(wh);
+        let coh = wo.dot(wh);
+        let f = fresnel_signed(cih, p.eta);
+        let reflect_ok = reflect && compatible(wh, wi, wo, ci, true);
+        let refract_ok = refract && compatible(wh, wi, wo, ci, false);
+        let d = ggx_d(wh, a);
+        let g = ggx_g1(wi, wh, a) * ggx_g1(wo, wh, a);
+        let cc_alpha = 0.1 * (1.0 - p.clearcoat_gloss) + 0.001 * p.clearcoat_gloss;
+        if reflect_ok && f > 0.0 {
+            value += principled_fresnel(p, f, cih, front, bsdf) * (d * g / (4.0 * ci.abs()));
+        }
+        if p.spec_trans != 0.0 && bsdf > 0.0 && refract_ok && f < 1.0 {
+            let den = cih + eta_path * coh;
+            let t = (1.0 - f) * d * g * eta_path * eta_path * cih * coh / (ci * den * den);
+            let b = p.base_color;
+            value += Vec3::new(b.x.sqrt(), b.y.sqrt(), b.z.sqrt()) * (bsdf * t.abs());
+        }
+        if p.clearcoat > 0.0 && reflect_ok && front {
+            let fcc = schlick(Vec3::splat(0.04), cih, p.eta).x;
+            let gcc = smith_ggx1(wi, wh, 0.25) * smith_ggx1(wo, wh, 0.25);
+            value += Vec3::splat(p.clearcoat * 0.25 * fcc * gtr1_d(wh, cc_alpha) * gcc * co.abs());
+        }
+        // Sheen only with the diffuse lobe: Mitsuba's scalar variants add it inside that
+        // branch.
+        if brdf > 0.0 && reflect && front {
+            let cd = wh.dot(wo);
+            value += p.base_color * (brdf * co.abs() * INV_PI * diffuse_shape(p, ci, co, cd));
+            if p.sheen > 0.0 && 1.0 - p.metallic > 0.0 {
+                value += sheen_color(p, cd) * (p.sheen * (1.0 - p.metallic) * co.abs());
+            }
+        }
+        let probs = lobe_probabilities(p, f, front);
+        let p_reflect = 1.0 - probs.x - probs.y - probs.z;
+        let mut dwh = (1.0 / (4.0 * coh)).abs();
+        if p.spec_trans != 0.0 && !reflect {
+            let den = cih + eta_path * coh;
+            dwh = (eta_path * eta_path * coh / (den * den)).abs();
+        }
+        let mut wi_up = wi;
+        if !front {
+            wi_up = -wi;
+        }
+        if reflect_ok {
+            pdf += p_reflect * visible_pdf(wi_up, wh, a) * dwh;
+            if p.clearcoat != 0.0 {
+                let mut cc = 0.0f32;
+                if wh.z >= 0.0 {
+                    cc = wh.z * gtr1_d(wh, cc_alpha);
+                }
+                pdf += probs.y * cc * dwh;
+            }
+        }
+        if reflect {
+            pdf += probs.x * INV_PI * co;
+        }
+        if p.spec_trans != 0.0 && refract_ok {
+            pdf += probs.z * visible_pdf(wi_up, wh, a) * dwh;
+        }
+    }
+    value.extend(pdf)
+}
+
+/// `principled`: a direction `wo` for the viewer at `wi`, drawn as Mitsuba draws it (`u`
+/// places it, `choice` picks the lobe); zero where the sample fails. Its weight is
+/// [`eval`]'s value over its density.
+#[kernel_fn]
+pub fn sample(p: Principled, wi: Vec3, u: Vec2, choice: f32) -> Vec3 {
+    let ci = wi.z;
+    let mut wo = Vec3::ZERO;
+    let front = ci > 0.0;
+    let bsdf = (1.0 - p.metallic) * p.spec_trans;
+    if ci != 0.0 && (front || bsdf > 0.0) {
+        let a = dist_alpha(p.roughness, p.anisotropic);
+        let mut wi_up = wi;
+        if !front {
+            wi_up = -wi;
+        }
+        let m = visible_sample(wi_up, a, u);
+        let cim = wi.dot(m);
+        let f = fresnel_signed(cim, p.eta);
+        let probs = lobe_probabilities(p, f, front);
+        // The microfacet the direction reflects or refracts through (none for diffuse).
+        let mut mm = m;
+        let mut reflection = true;
+        let mut microfacet = true;
+        if choice < probs.x {
+            wo = cosine_concentric(u);
+            microfacet = false;
+        } else if choice < probs.x + probs.y {
+            let cc_alpha = 0.1 * (1.0 - p.clearcoat_gloss) + 0.001 * p.clearcoat_gloss;
+            mm = gtr1_sample(cc_alpha, u);
+            wo = reflect(wi, mm);
+        } else if choice < probs.x + probs.y + probs.z {
+            let mut eta_ti = 1.0 / p.eta;
+            if cim < 0.0 {
+                eta_ti = p.eta;
+            }
+            let ct = (1.0 - (1.0 - cim * cim) * eta_ti * eta_ti).max(0.0).sqrt();
+            let mut cos_t = -ct;
+            if cim < 0.0 {
+                cos_t = ct;
+            }
+            wo = m * (cim * eta_ti + cos_t) - wi * eta_ti;
+            reflection = false;
+        } else {
+            wo = reflect(wi, m);
+        }
+        let mut ok = ci * wo.z > 0.0;
+        if !reflection {
+            ok = ci * wo.z < 0.0;
+        }
+        if microfacet {
+            ok = ok && compatible(mm, wi, wo, ci, reflection);
+        }
+        if !ok {
+            wo = Vec3::ZERO;
+        }
+    }
+    wo
+}
+
+/// `principledthin`'s lobe probabilities: x specular reflection, y specular
+/// transmission, z diffuse reflection (diffuse transmission takes the rest), normalised.
+#[kernel_fn]
+pub fn thin_probabilities(p: Principled) -> Vec3 {
+    let dt = p.diff_trans * 0.5;
+    let mut sr = 0.0f32;
+    let mut st = 0.0f32;
+    if p.spec_trans != 0.0 {
+        sr = p.spec_trans * p.rate_a * 0.5;
+        st = p.spec_trans * p.rate_b * 0.5;
+    }
+    let dr = p.rate_d * (1.0 - p.spec_trans) * (1.0 - dt);
+    let mut dtp = 0.0f32;
+    if p.diff_trans != 0.0 {
+        dtp = p.rate_c * (1.0 - p.spec_trans) * dt;
+    }
+    let total = sr + st + dr + dtp;
+    let mut r = Vec3::ZERO;
+    if total > 0.0 {
+        r = Vec3::new(sr, st, dr) / total;
+    }
+    r
+}
+
+/// `principledthin`: as [`eval`].
+#[kernel_fn]
+pub fn thin_eval(p: Principled, wi0: Vec3, wo0: Vec3) -> Vec4 {
+    let mut value = Vec3::ZERO;
+    let mut pdf = 0.0f32;
+    if wi0.z != 0.0 {
+        let dt = p.diff_trans * 0.5;
+        // Both sides alike: turn the viewer up.
+        let mut wi = wi0;
+        let mut wo = wo0;
+        if wi0.z < 0.0 {
+            wi = -wi0;
+            wo = -wo0;
+        }
+        let ci = wi.z;
+        let co = wo.z;
+        let reflect = co > 0.0;
+        let refract = co < 0.0;
+        let wr = Vec3::new(wo.x, wo.y, co.abs());
+        let wh = (wi + wr).normalize();
+        let reflect_ok = reflect && compatible(wh, wi, wo, ci, true);
+        let refract_ok = refract && compatible(wh, wi, wo, ci, false);
+        let a = dist_alpha(p.roughness, p.anisotropic);
+        let at = dist_alpha((0.65 * p.eta - 0.35) * p.roughness, p.anisotropic);
+        let probs = thin_probabilities(p);
+        if p.spec_trans != 0.0 {
+            let cih = wi.dot(wh);
+            let f = fresnel_signed(cih, p.eta);
+            let dwh = (1.0 / (4.0 * wr.dot(wh))).abs();
+            if reflect_ok {
+                let mut ft = Vec3::splat(f * (1.0 - p.spec_tint));
+                if p.spec_tint != 0.0 {
+                    let f0 = tint(p.base_color) * schlick_r0(p.eta);
+                    ft += schlick(f0, cih, p.eta) * p.spec_tint;
+                }
+                let g = ggx_g1(wi, wh, a) * ggx_g1(wo, wh, a);
+                value += ft * (p.spec_trans * ggx_d(wh, a) * g / (4.0 * ci));
+                pdf += probs.x * visible_pdf(wi, wh, a) * dwh;
+            }
+            if refract_ok {
+                let g = ggx_g1(wi, wh, at) * ggx_g1(wo, wh, at);
+                value += p.base_color * (p.spec_trans * (1.0 - f) * ggx_d(wh, at) * g / (4.0 * ci));
+                pdf += probs.y * visible_pdf(wi, wh, at) * dwh;
+            }
+        }
+        if reflect && p.spec_trans < 1.0 && dt < 1.0 {
+            let cd = wh.dot(wo);
+            let w = (1.0 - p.spec_trans) * (1.0 - dt);
+            value += p.base_color * (w * co * INV_PI * diffuse_shape(p, ci, co, cd));
+            if p.sheen > 0.0 {
+                value += sheen_color(p, cd) * (p.sheen * w * co.abs());
+            }
+        }
+        if p.diff_trans != 0.0 && refract && p.spec_trans < 1.0 && dt > 0.0 {
+            value += p.base_color * ((1.0 - p.spec_trans) * dt * INV_PI * co.abs());
+        }
+        if reflect {
+            pdf += probs.z * INV_PI * co;
+        }
+        if p.diff_trans != 0.0 && refract {
+            pdf += (1.0 - probs.x - probs.y - probs.z) * INV_PI * -co;
+        }
+    }
+    value.extend(pdf)
+}
+
+/// `principledthin`: as [`sample`].
+#[kernel_fn]
+pub fn thin_sample(p: Principled, wi0: Vec3, u: Vec2, choice: f32) -> Vec3 {
+    let mut wo = Vec3::ZERO;
+    if wi0.z != 0.0 {
+        let mut wi = wi0;
+        if wi0.z < 0.0 {
+            wi = -wi0;
+        }
+        let probs = thin_probabilities(p);
+        let mut ok = true;
+        if choice < probs.x {
+            let m = visible_sample(wi, dist_alpha(p.roughness, p.anisotropic), u);
+            wo = reflect(wi, m);
+            ok = compatible(m, wi, wo, wi.z, true) && wo.z > 0.0;
+        } else if choice < probs.x + probs.y {
+            let at = dist_alpha((0.65 * p.eta - 0.35) * p.roughness, p.anisotropic);
+            let m = visible_sample(wi, at, u);
+            let r = reflect(wi, m);
+            wo = Vec3::new(r.x, r.y, -r.z);
+            ok = compatible(m, wi, wo, wi.z, false) && wo.z < 0.0;
+        } else if choice < probs.x + probs.y + probs.z {
+            wo = cosine_concentric(u);
+        } else if p.diff_trans != 0.0 {
+            wo = -cosine_concentric(u);
+        } else {
+            ok = false;
+        }
+        if !ok {
+            wo = Vec3::ZERO;
+        }
+        if wi0.z < 0.0 {
+            wo = -wo;
+        }
+    }
+    wo
+}
+
+/// The shading frame Mitsuba evaluates the BSDF of material `m` in at a hit on triangle
+/// `tri` (geometric normal `ng`; `n` the shading normal turned to the viewer, `front`
+/// whether it was already): columns s, t and the normal, where s is dp/du made orthogonal
+/// to the normal (only an anisotropic material needs it; others take any tangent). Under
+/// `twosided` the back side is mirrored to the front, as Mitsuba's `twosided` flips the
+/// local z.
+#[kernel_fn]
+#[allow(clippy::too_many_arguments)]
+pub fn frame(
+    m: Material,
+    textures: &[Vec4],
+    tex_coords: &[Vec4],
+    tri: Triangle,
+    ng: Vec3,
+    n: Vec3,
+    front: bool,
+) -> Mat3 {
+    let mut ns = n;
+    if !front {
+        ns = -n;
+    }
+    let mut z = ns;
+    if m.flags & TWO_SIDED != 0 {
+        z = n;
+    }
+    let mut r = crate::sampling::frame(z);
+    let anisotropic = textures[(m.table - 1) as usize].y;
+    if anisotropic != 0.0 {
+        let tg = crate::perturb::hit_tangents(tex_coords, tri.original, tri, ng);
+        let s = crate::perturb::shading_tangent(tg.x_axis, ns);
+        r = Mat3::from_cols(s, ns.cross(s), z);
+    }
+    r
+}
+
+/// [`eval`] or [`thin_eval`] by material kind.
+#[kernel_fn]
+pub fn eval_kind(p: Principled, kind: u32, wi: Vec3, wo: Vec3) -> Vec4 {
+    if kind == PRINCIPLED_THIN {
+        thin_eval(p, wi, wo)
+    } else {
+        eval(p, wi, wo)
+    }
+}
+
+/// [`sample`] or [`thin_sample`] by material kind.
+#[kernel_fn]
+pub fn sample_kind(p: Principled, kind: u32, wi: Vec3, u: Vec2, choice: f32) -> Vec3 {
+    if kind == PRINCIPLED_THIN {
+        thin_sample(p, wi, u, choice)
+    } else {
+        sample(p, wi, u, choice)
+    }
+}
