@@ -299,6 +299,30 @@ pub fn sheen_color(p: Principled, cd: f32) -> Vec3 {
     c * schlick_weight(cd.abs())
 }
 
+/// Three lobes' sampling weights `w` as probabilities, a fourth of weight `rest` taking the
+/// remainder (all zero where every weight is).
+#[kernel_fn]
+pub fn shares(w: Vec3, rest: f32) -> Vec3 {
+    let total = w.x + w.y + w.z + rest;
+    let mut r = Vec3::ZERO;
+    if total > 0.0 {
+        r = w / total;
+    }
+    r
+}
+
+/// The clearcoat's GTR1 roughness: 0.1 to 0.001 as `clearcoat_gloss` goes from 0 to 1.
+#[kernel_fn]
+pub fn clearcoat_alpha(p: Principled) -> f32 {
+    0.1 * (1.0 - p.clearcoat_gloss) + 0.001 * p.clearcoat_gloss
+}
+
+/// `principledthin`'s transmission roughness: the roughness scaled by the film's index.
+#[kernel_fn]
+pub fn thin_transmission_alpha(p: Principled) -> Vec2 {
+    dist_alpha((0.65 * p.eta - 0.35) * p.roughness, p.anisotropic)
+}
+
 /// `principled`'s lobe probabilities for specular Fresnel factor `f`: x diffuse,
 /// y clearcoat, z specular transmission (specular reflection takes the rest), normalised.
 #[kernel_fn]
@@ -320,12 +344,7 @@ pub fn lobe_probabilities(p: Principled, f: f32, front: bool) -> Vec3 {
             trans = p.rate_a * bsdf * (1.0 - f);
         }
     }
-    let total = reflect + trans + clearcoat + diffuse;
-    let mut r = Vec3::ZERO;
-    if total > 0.0 {
-        r = Vec3::new(diffuse, clearcoat, trans) / total;
-    }
-    r
+    shares(Vec3::new(diffuse, clearcoat, trans), reflect)
 }
 
 /// `principled`: xyz = f·|cos| for directions `wi`, `wo`, w = the density with which
@@ -362,7 +381,7 @@ pub fn eval(p: Principled, wi: Vec3, wo: Vec3) -> Vec4 {
         let refract_ok = refract && compatible(wh, wi, wo, ci, false);
         let d = ggx_d(wh, a);
         let g = ggx_g1(wi, wh, a) * ggx_g1(wo, wh, a);
-        let cc_alpha = 0.1 * (1.0 - p.clearcoat_gloss) + 0.001 * p.clearcoat_gloss;
+        let cc_alpha = clearcoat_alpha(p);
         if reflect_ok && f > 0.0 {
             value += principled_fresnel(p, f, cih, front, bsdf) * (d * g / (4.0 * ci.abs()));
         }
@@ -444,7 +463,7 @@ pub fn sample(p: Principled, wi: Vec3, u: Vec2, choice: f32) -> Vec3 {
             wo = cosine_concentric(u);
             microfacet = false;
         } else if choice < probs.x + probs.y {
-            let cc_alpha = 0.1 * (1.0 - p.clearcoat_gloss) + 0.001 * p.clearcoat_gloss;
+            let cc_alpha = clearcoat_alpha(p);
             mm = gtr1_sample(cc_alpha, u);
             wo = reflect(wi, mm);
         } else if choice < probs.x + probs.y + probs.z {
@@ -492,12 +511,7 @@ pub fn thin_probabilities(p: Principled) -> Vec3 {
     if p.diff_trans != 0.0 {
         dtp = p.rate_c * (1.0 - p.spec_trans) * dt;
     }
-    let total = sr + st + dr + dtp;
-    let mut r = Vec3::ZERO;
-    if total > 0.0 {
-        r = Vec3::new(sr, st, dr) / total;
-    }
-    r
+    shares(Vec3::new(sr, st, dr), dtp)
 }
 
 /// `principledthin`: as [`eval`].
@@ -523,7 +537,7 @@ pub fn thin_eval(p: Principled, wi0: Vec3, wo0: Vec3) -> Vec4 {
         let reflect_ok = reflect && compatible(wh, wi, wo, ci, true);
         let refract_ok = refract && compatible(wh, wi, wo, ci, false);
         let a = dist_alpha(p.roughness, p.anisotropic);
-        let at = dist_alpha((0.65 * p.eta - 0.35) * p.roughness, p.anisotropic);
+        let at = thin_transmission_alpha(p);
         let probs = thin_probabilities(p);
         if p.spec_trans != 0.0 {
             let cih = wi.dot(wh);
@@ -582,7 +596,7 @@ pub fn thin_sample(p: Principled, wi0: Vec3, u: Vec2, choice: f32) -> Vec3 {
             wo = reflect(wi, m);
             ok = compatible(m, wi, wo, wi.z, true) && wo.z > 0.0;
         } else if choice < probs.x + probs.y {
-            let at = dist_alpha((0.65 * p.eta - 0.35) * p.roughness, p.anisotropic);
+            let at = thin_transmission_alpha(p);
             let m = visible_sample(wi, at, u);
             let r = reflect(wi, m);
             wo = Vec3::new(r.x, r.y, -r.z);
