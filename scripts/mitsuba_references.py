@@ -248,6 +248,42 @@ def write_colored_ply(path):
             f.write("3 " + " ".join(str(k) for k in t) + "\n")
 
 
+def write_attributes_ply(path):
+    """An ASCII PLY of a 4 x 4 grid of squares in z = 0 spanning [-1, 1]^2, each two
+    triangles with the same face values (Mitsuba reads triangles only), with Mitsuba mesh
+    attributes besides positions: per vertex `weight_x` (one
+    channel: `vertex_weight`) and `tint_r`, `tint_g`, `tint_b` (`vertex_tint_color`); per face
+    `red`, `green`, `blue` (`face_color`) and `opacity_x` (`face_opacity`)."""
+    n = 5
+    verts, faces = [], []
+    for j in range(n):
+        for i in range(n):
+            u, v = i / (n - 1), j / (n - 1)
+            verts.append((-1 + 2 * u, -1 + 2 * v, 0.0, u * v, 0.2 + 0.7 * v, 0.8 * u, 0.9 - 0.6 * u))
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a = j * n + i
+            k = j * (n - 1) + i
+            colour = ((0.9, 0.2, 0.1), (0.1, 0.7, 0.3), (0.2, 0.3, 0.9), (0.8, 0.8, 0.2))[(i + j) % 4]
+            opacity = (1.0, 0.25, 0.6, 0.0)[(k * 7 // 3) % 4]
+            faces.append(((a, a + 1, a + n + 1), colour + (opacity,)))
+            faces.append(((a, a + n + 1, a + n), colour + (opacity,)))
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        f.write("ply\nformat ascii 1.0\n")
+        f.write(f"element vertex {len(verts)}\n")
+        for p in ("x", "y", "z", "weight_x", "tint_r", "tint_g", "tint_b"):
+            f.write(f"property float {p}\n")
+        f.write(f"element face {len(faces)}\nproperty list uchar int vertex_indices\n")
+        for p in ("red", "green", "blue", "opacity_x"):
+            f.write(f"property float {p}\n")
+        f.write("end_header\n")
+        for v in verts:
+            f.write(" ".join(f"{c:.6f}" for c in v) + "\n")
+        for tri, values in faces:
+            f.write("3 " + " ".join(str(k) for k in tri) + " " + " ".join(f"{c:.6f}" for c in values) + "\n")
+
+
 def write_textured_obj(path):
     """A unit quad in z = 0 (two triangles) with texture coordinates running 0..2 in u and
     0..1 in v, so that Mitsuba's flip of an OBJ's v and the repeat wrap both show."""
@@ -822,6 +858,31 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Mesh attributes of a PLY (meshes/attributes.ply, see write_attributes_ply):
+    # per-face colours blended with gold by a one-channel vertex attribute, and in front, a
+    # smaller copy masked by a one-channel face attribute and coloured per vertex.
+    "mesh_attributes": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="ply">
+        <string name="filename" value="meshes/attributes.ply"/>
+        <transform name="to_world"><scale value="0.7"/><rotate x="1" angle="-15"/><translate y="0.9" z="-0.7"/></transform>
+        <bsdf type="blendbsdf">
+            <texture type="mesh_attribute" name="weight"><string name="name" value="vertex_weight"/></texture>
+            <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="face_color"/></texture></bsdf>
+            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/><string name="material" value="Au"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="ply">
+        <string name="filename" value="meshes/attributes.ply"/>
+        <transform name="to_world"><scale value="0.3"/><rotate y="1" angle="35"/><translate x="-0.3" y="0.5" z="0.2"/></transform>
+        <bsdf type="mask">
+            <texture type="mesh_attribute" name="opacity"><string name="name" value="face_opacity"/></texture>
+            <bsdf type="twosided"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_tint_color"/><float name="scale" value="0.9"/></texture></bsdf></bsdf>
+        </bsdf>
+    </shape>""",
+    ),
     # Principled: a checkered sphere with every reflection lobe (metallic, tinted specular,
     # sheen, clearcoat, flatness) and an anisotropic metal-like cube whose `specular` sets eta.
     "principled": scene(
@@ -950,6 +1011,7 @@ def main():
     write_serialized(os.path.join(OUT, "meshes", "shapes.serialized"))
     write_textured_obj(os.path.join(OUT, "meshes", "textured_quad.obj"))
     write_colored_ply(os.path.join(OUT, "meshes", "colored.ply"))
+    write_attributes_ply(os.path.join(OUT, "meshes", "attributes.ply"))
     write_png(os.path.join(OUT, "textures", "stripes.png"))
     write_sky_exr(os.path.join(OUT, "textures", "sky.exr"))
     write_normal_map(os.path.join(OUT, "textures", "waves_normal.png"))

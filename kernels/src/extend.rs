@@ -21,7 +21,7 @@ use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
-use crate::texture::{hit_uv, luminance, surface_color, texture_eval};
+use crate::texture::{hit_uv, luminance, texture_at_hit};
 use cohort::prelude::*;
 
 /// Bins of the reconstruction filter's table across `[-radius, radius]`
@@ -374,8 +374,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     let mut weight = m.blend_weight;
                     if m.blend_texture != 0 {
                         let buv = hit_uv(tex_coords, t.original, h);
-                        weight = luminance(texture_eval(textures, m.blend_texture - 1, buv))
-                            .clamp(0.0, 1.0);
+                        weight = luminance(texture_at_hit(
+                            textures,
+                            m.blend_texture - 1,
+                            buv,
+                            t.original,
+                            h,
+                        ))
+                        .clamp(0.0, 1.0);
                     }
                     if uniform(key, 10 + level) < weight {
                         m = materials[(m.blend - 1) as usize];
@@ -437,7 +443,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
                 let mut albedo = m.color;
                 if m.texture != 0 {
-                    albedo = surface_color(textures, m.texture - 1, uv, t.original, h);
+                    albedo = texture_at_hit(textures, m.texture - 1, uv, t.original, h);
                 }
                 // Mitsuba `mask`: the BSDF scatters with probability `opacity`, else the path
                 // passes through (a null interaction: one more vertex, a delta density).
@@ -445,7 +451,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 if m.flags & MASKED != 0 {
                     opacity = m.opacity;
                     if m.opacity_texture != 0 {
-                        opacity = luminance(texture_eval(textures, m.opacity_texture - 1, uv));
+                        opacity = luminance(texture_at_hit(
+                            textures,
+                            m.opacity_texture - 1,
+                            uv,
+                            t.original,
+                            h,
+                        ));
                     }
                     opacity = opacity.clamp(0.0, 1.0);
                 }

@@ -6,8 +6,8 @@ use cohort::prelude::*;
 
 /// Header flags (`cohort_scenes::texture`).
 pub const TEXTURE_BITMAP: u32 = 1;
-/// Mitsuba `mesh_attribute` `vertex_color` (`surface_color`).
-pub const TEXTURE_VERTEX_COLOR: u32 = 2;
+/// Mitsuba `mesh_attribute` (`texture_at_hit`).
+pub const TEXTURE_MESH_ATTRIBUTE: u32 = 2;
 pub const FILTER_NEAREST: u32 = 1;
 pub const WRAP_MIRROR: u32 = 2;
 pub const WRAP_CLAMP: u32 = 4;
@@ -155,14 +155,15 @@ pub fn texture_gradient(textures: &[Vec4], header: u32, uv: Vec2) -> Vec2 {
     g
 }
 
-/// A BSDF colour's texture at hit `h` (barycentric weights of v1 and v2 in `h.y`, `h.z`) of
-/// triangle `original`, whose texture coordinates are `uv`: the triangle's vertex colours
-/// interpolated, times the texture's scale, for Mitsuba's `mesh_attribute` `vertex_color`
-/// (the colours, 3 per triangle, start where header entry 0's y says); else `texture_eval`.
+/// A texture read at a surface point: hit `h` (barycentric weights of v1 and v2 in `h.y`,
+/// `h.z`) of triangle `original`, whose texture coordinates are `uv`. For Mitsuba's
+/// `mesh_attribute`, the attribute's values at the triangle's corners interpolated, times
+/// the texture's scale (the values, 3 per triangle, start where header entry 0's y says; a
+/// per-face attribute has one value three times); else `texture_eval`.
 #[kernel_fn]
-pub fn surface_color(textures: &[Vec4], header: u32, uv: Vec2, original: u32, h: Vec4) -> Vec3 {
+pub fn texture_at_hit(textures: &[Vec4], header: u32, uv: Vec2, original: u32, h: Vec4) -> Vec3 {
     let h0 = textures[header as usize];
-    if h0.x.to_bits() == TEXTURE_VERTEX_COLOR {
+    if h0.x.to_bits() == TEXTURE_MESH_ATTRIBUTE {
         let k = h0.y.to_bits() + 3 * original;
         let scale = textures[(header + 3) as usize].x;
         (textures[k as usize].truncate() * (1.0 - h.y - h.z)

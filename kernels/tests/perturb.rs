@@ -22,7 +22,11 @@ fn bitmap(filter: Filter, to_uv: UvTransform) -> Vec<Vec4> {
         wrap: Wrap::Repeat,
         to_uv,
     };
-    gpu_textures(&[t]).0.into_iter().map(Vec4::from).collect()
+    gpu_textures(&[t], 0)
+        .0
+        .into_iter()
+        .map(Vec4::from)
+        .collect()
 }
 
 /// Inside a texel cell the gradient is the derivative of the bilinear luminance.

@@ -38,7 +38,7 @@ fn kernel_lookup_matches_the_scene_texture() {
             });
         }
     }
-    let (data, starts) = gpu_textures(&textures);
+    let (data, starts) = gpu_textures(&textures, 0);
     let data: Vec<Vec4> = data.into_iter().map(Vec4::from_array).collect();
     for (t, &start) in textures.iter().zip(&starts) {
         for i in 0..40 {

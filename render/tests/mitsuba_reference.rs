@@ -449,6 +449,24 @@ fn vertex_colors_of_a_ply() {
     check("vertex_colors");
 }
 
+/// Mitsuba's other mesh attributes: per-face colours, a one-channel vertex attribute as a
+/// blend's weight, a one-channel face attribute as a mask's opacity, a second vertex colour.
+#[test]
+fn face_and_one_channel_mesh_attributes() {
+    check("mesh_attributes");
+}
+
+/// The attributes matter at this budget: each replaced by its mean over the triangles fails.
+#[test]
+fn mesh_attributes_replaced_by_their_means_fail() {
+    assert_fails("mesh_attributes", |scene| {
+        for (_, corners) in &mut scene.triangles.attributes {
+            let mean = corners.iter().sum::<Vec3>() / corners.len() as f32;
+            corners.fill(mean);
+        }
+    });
+}
+
 #[test]
 fn blend_bsdf_with_textured_weights() {
     check("blendbsdf_texture");

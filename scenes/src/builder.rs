@@ -92,14 +92,18 @@ impl SceneBuilder {
         if mesh.uvs.is_some() && self.scene.triangles.uvs.is_none() {
             self.scene.triangles.uvs = Some(BARYCENTRIC_UVS.repeat(self.scene.triangles.len()));
         }
-        if mesh.colors.is_some() && self.scene.triangles.colors.is_none() {
-            self.scene.triangles.colors = Some(vec![Vec3::ZERO; 3 * self.scene.triangles.len()]);
+        for a in &mesh.attributes {
+            let tris = &mut self.scene.triangles;
+            if !tris.attributes.iter().any(|(n, _)| *n == a.name) {
+                tris.attributes
+                    .push((a.name.clone(), vec![Vec3::ZERO; 3 * tris.len()]));
+            }
         }
 
         let tris = &mut self.scene.triangles;
         let first = tris.len() as u32;
         let mut added = Added::default();
-        for t in &mesh.indices {
+        for (index, t) in mesh.indices.iter().enumerate() {
             let p = t.map(|i| mesh.positions[i as usize]);
             let cross = (p[1] - p[0]).cross(p[2] - p[0]);
             let area2 = cross.length_squared();
@@ -116,10 +120,10 @@ impl SceneBuilder {
                     None => uvs.extend(BARYCENTRIC_UVS),
                 }
             }
-            if let Some(colors) = &mut tris.colors {
-                match &mesh.colors {
-                    Some(c) => colors.extend(t.map(|i| c[i as usize])),
-                    None => colors.extend([Vec3::ZERO; 3]),
+            for (name, corners) in &mut tris.attributes {
+                match mesh.attributes.iter().find(|a| a.name == *name) {
+                    Some(a) => corners.extend((0..3).map(|k| a.corner(index, *t, k))),
+                    None => corners.extend([Vec3::ZERO; 3]),
                 }
             }
             if let Some(normals) = &mut tris.normals {

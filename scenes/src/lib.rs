@@ -30,6 +30,7 @@ pub mod mitsuba;
 pub mod morton;
 pub mod obj;
 pub mod ply;
+mod ply_attributes;
 pub mod rough_plastic;
 pub mod scene;
 pub mod serialized;
@@ -47,7 +48,7 @@ pub use environment_map::EnvironmentMap;
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use film_filter::{FilmFilter, FilterKind};
 pub use material::{Bsdf, GpuMaterial, Mask, Material, Perturb, PerturbKind, Principled};
-pub use mesh::TriMesh;
+pub use mesh::{MeshAttribute, TriMesh};
 pub use mitsuba::{
     load_mitsuba, load_mitsuba_str, load_mitsuba_str_with, load_mitsuba_with,
     load_mitsuba_with_params, LoadOptions, Loaded,

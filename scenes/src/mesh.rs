@@ -5,6 +5,39 @@
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
+/// One of Mitsuba's mesh attributes: a value per vertex (a name starting with `vertex_`) or
+/// per triangle (`face_`; a polygon's value repeated for each triangle of its fan).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    pub name: String,
+    /// 1 (a number, held in `x`), 3 (a colour or vector) or 4 (r, g, b, a: Mitsuba keeps it,
+    /// but no texture can read it).
+    pub channels: u32,
+    pub values: Vec<Vec3>,
+}
+
+impl MeshAttribute {
+    /// Whether it holds a value per triangle rather than per vertex.
+    pub fn per_face(&self) -> bool {
+        self.name.starts_with("face_")
+    }
+
+    /// The attribute's value at corner `k` (0..3) of triangle `face`, whose vertices are
+    /// `t`: a number as grey, as Mitsuba evaluates a one-channel attribute as a colour.
+    pub fn corner(&self, face: usize, t: [u32; 3], k: usize) -> Vec3 {
+        let v = if self.per_face() {
+            self.values[face]
+        } else {
+            self.values[t[k] as usize]
+        };
+        if self.channels == 1 {
+            Vec3::splat(v.x)
+        } else {
+            v
+        }
+    }
+}
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
@@ -12,9 +45,9 @@ pub struct TriMesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates (same length as `positions`) when the source had them.
     pub uvs: Option<Vec<Vec2>>,
-    /// Per-vertex colours (same length as `positions`) when the source had them (a PLY's
-    /// r, g, b or red, green, blue).
-    pub colors: Option<Vec<Vec3>>,
+    /// Mitsuba's mesh attributes (a PLY's extra properties: `vertex_color` from its r, g, b,
+    /// `face_color`, `vertex_weight`, ...), what a `mesh_attribute` texture reads.
+    pub attributes: Vec<MeshAttribute>,
     /// Counter-clockwise = front.
     pub indices: Vec<[u32; 3]>,
 }
@@ -73,10 +106,23 @@ impl TriMesh {
             (None, Some(b)) if !had_positions => self.uvs = Some(b.clone()),
             _ => self.uvs = None,
         }
-        match (&mut self.colors, &other.colors) {
-            (Some(a), Some(b)) => a.extend_from_slice(b),
-            (None, Some(b)) if !had_positions => self.colors = Some(b.clone()),
-            _ => self.colors = None,
+        if !had_positions {
+            self.attributes = other.attributes.clone();
+        } else {
+            // An attribute survives only if both meshes have it with the same channels.
+            self.attributes.retain_mut(|a| {
+                match other
+                    .attributes
+                    .iter()
+                    .find(|b| b.name == a.name && b.channels == a.channels)
+                {
+                    Some(b) => {
+                        a.values.extend_from_slice(&b.values);
+                        true
+                    }
+                    None => false,
+                }
+            });
         }
         self.positions.extend_from_slice(&other.positions);
         self.indices.extend(
@@ -106,9 +152,17 @@ impl TriMesh {
         let mut out = TriMesh {
             normals: Some(Vec::new()),
             uvs: Some(Vec::new()),
+            attributes: self
+                .attributes
+                .iter()
+                .map(|a| MeshAttribute {
+                    values: Vec::new(),
+                    ..a.clone()
+                })
+                .collect(),
             ..TriMesh::default()
         };
-        for t in &self.indices {
+        for (face, t) in self.indices.iter().enumerate() {
             let p = t.map(|i| self.positions[i as usize]);
             let mut c = p.map(&uv);
             let regular: Vec<usize> = (0..3).filter(|&k| !singular(p[k])).collect();
@@ -141,6 +195,13 @@ impl TriMesh {
                 out.positions.push(p[k]);
                 out.normals.as_mut().unwrap().push(normals[t[k] as usize]);
                 out.uvs.as_mut().unwrap().push(c[k]);
+            }
+            for (a, o) in self.attributes.iter().zip(&mut out.attributes) {
+                if a.per_face() {
+                    o.values.push(a.values[face]);
+                } else {
+                    o.values.extend(t.map(|i| a.values[i as usize]));
+                }
             }
             out.indices.push([base, base + 1, base + 2]);
         }

@@ -70,7 +70,7 @@ pub fn parse_obj(bytes: &[u8], file: &Path) -> Result<TriMesh, SceneError> {
             positions,
             normals,
             uvs,
-            colors: None,
+            attributes: Vec::new(),
             indices,
         });
     }

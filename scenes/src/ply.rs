@@ -7,14 +7,16 @@
 //! Read: `vertex` (x, y, z; nx, ny, nz when all three exist; any numeric type), `face` (a list named
 //! `vertex_indices` or `vertex_index`, polygons triangulated as fans), `tristrips` (a list named
 //! `vertex_indices`, strips separated by -1, alternate triangles flipped to keep one winding).
-//! Other elements and properties are read past and ignored.
+//! Other properties of `vertex` and `face` become Mitsuba's mesh attributes
+//! (`crate::ply_attributes`); other elements are read past and ignored.
 
 use std::path::Path;
 
 use glam::Vec3;
 
 use crate::error::{ErrorKind, Location, SceneError, Warning};
-use crate::mesh::TriMesh;
+use crate::mesh::{MeshAttribute, TriMesh};
+use crate::ply_attributes::{group_attributes, AttributeFields};
 
 pub fn read_ply(path: &Path, warnings: &mut Vec<Warning>) -> Result<TriMesh, SceneError> {
     let bytes = std::fs::read(path).map_err(|e| {
@@ -441,7 +443,8 @@ pub fn parse_ply(
     let mut mesh = TriMesh::new();
     let mut normals: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<glam::Vec2> = Vec::new();
-    let mut colors: Vec<Vec3> = Vec::new();
+    // One entry's scalar values, by property index (mesh attributes are read from it).
+    let mut row: Vec<f32> = Vec::new();
     let mut list = Vec::new();
     let mut short_faces = 0u64;
 
@@ -459,30 +462,16 @@ pub fn parse_ply(
             "vertex" => {
                 let xyz = [find(&["x"]), find(&["y"]), find(&["z"])];
                 let nxyz = [find(&["nx"]), find(&["ny"]), find(&["nz"])];
-                // Texture coordinates under the names Mitsuba reads.
-                let uv = [
-                    find(&["u", "s", "texture_u", "texture_s"]),
-                    find(&["v", "t", "texture_v", "texture_t"]),
-                ];
+                // Texture coordinates under the names Mitsuba reads, in its order of preference.
+                let uv_names = [["u", "v"], ["texture_u", "texture_v"], ["s", "t"]]
+                    .into_iter()
+                    .find(|pair| pair.iter().all(|n| find(&[n]).is_some()))
+                    .unwrap_or(["u", "v"]);
+                let uv = uv_names.map(|n| find(&[n]));
                 let has_uvs = uv.iter().all(Option::is_some);
-                // Colours under the names Mitsuba groups into `vertex_color`.
-                let mut rgb = [find(&["r"]), find(&["g"]), find(&["b"])];
-                if rgb.iter().any(Option::is_none) {
-                    rgb = [find(&["red"]), find(&["green"]), find(&["blue"])];
-                }
-                let has_colors = rgb.iter().all(Option::is_some);
-                // Mitsuba converts integer channels to float as they are, not over their range.
-                if has_colors
-                    && rgb.iter().flatten().any(|&k| {
-                        matches!(element.properties[k].ty, PropertyType::Scalar(t) if t.is_integer())
-                    })
-                {
-                    warnings.push(Warning::new(
-                        Location::line(file, element.line),
-                        "vertex colours have integer fields: Mitsuba reads them as they are \
-                         (colour attributes are expected to be in [0, 1])",
-                    ));
-                }
+                let mut reserved = vec!["x", "y", "z", "nx", "ny", "nz", "u", "v"];
+                reserved.extend(uv_names);
+                let attributes = mesh_attributes(file, element, "vertex_", &reserved, warnings);
                 if xyz.iter().any(Option::is_none) {
                     return Err(syntax(
                         file,
@@ -494,24 +483,24 @@ pub fn parse_ply(
                 // A header may announce more than the file holds; never reserve beyond what it could hold.
                 mesh.positions
                     .reserve(element.count.min(bytes.len() as u64 / 3) as usize);
+                row.clear();
+                row.resize(element.properties.len(), 0.0);
                 for index in 0..element.count {
                     r.begin_entry("vertex", index)?;
                     let mut p = [0f32; 3];
                     let mut n = [0f32; 3];
                     let mut t = [0f32; 2];
-                    let mut c = [0f32; 3];
                     for (k, prop) in element.properties.iter().enumerate() {
                         match &prop.ty {
                             PropertyType::Scalar(ty) => {
                                 let v = r.value(*ty)? as f32;
+                                row[k] = v;
                                 if let Some(axis) = xyz.iter().position(|&i| i == Some(k)) {
                                     p[axis] = v;
                                 } else if let Some(axis) = nxyz.iter().position(|&i| i == Some(k)) {
                                     n[axis] = v;
                                 } else if let Some(axis) = uv.iter().position(|&i| i == Some(k)) {
                                     t[axis] = v;
-                                } else if let Some(axis) = rgb.iter().position(|&i| i == Some(k)) {
-                                    c[axis] = v;
                                 }
                             }
                             PropertyType::List { count, item } => {
@@ -535,18 +524,13 @@ pub fn parse_ply(
                     if has_uvs {
                         uvs.push(glam::Vec2::from(t));
                     }
-                    if has_colors {
-                        colors.push(Vec3::from(c));
-                    }
+                    push_attribute_values(&attributes, &row, &mut mesh.attributes, 1);
                 }
                 if has_normals {
                     mesh.normals = Some(std::mem::take(&mut normals));
                 }
                 if has_uvs {
                     mesh.uvs = Some(std::mem::take(&mut uvs));
-                }
-                if has_colors {
-                    mesh.colors = Some(std::mem::take(&mut colors));
                 }
             }
             "face" | "tristrips" => {
@@ -558,13 +542,21 @@ pub fn parse_ply(
                         format!("element '{}' has no 'vertex_indices' list", element.name),
                     ));
                 };
+                // Mitsuba reads face attributes (it does not read strips at all).
+                let attributes = if strips {
+                    Vec::new()
+                } else {
+                    mesh_attributes(file, element, "face_", &[], warnings)
+                };
+                row.clear();
+                row.resize(element.properties.len(), 0.0);
                 for index in 0..element.count {
                     r.begin_entry(&element.name, index)?;
                     let mut polygon = Vec::new();
                     for (k, prop) in element.properties.iter().enumerate() {
                         match &prop.ty {
                             PropertyType::Scalar(ty) => {
-                                r.value(*ty)?;
+                                row[k] = r.value(*ty)? as f32;
                             }
                             PropertyType::List { count, item } => {
                                 r.list(*count, *item, &mut list)?;
@@ -602,6 +594,9 @@ pub fn parse_ply(
                         for i in 1..polygon.len() - 1 {
                             mesh.indices.push([polygon[0], polygon[i], polygon[i + 1]]);
                         }
+                        // A polygon's attribute values hold for each triangle of its fan.
+                        let triangles = polygon.len() - 2;
+                        push_attribute_values(&attributes, &row, &mut mesh.attributes, triangles);
                     }
                 }
             }
@@ -630,6 +625,74 @@ pub fn parse_ply(
         ));
     }
     Ok(mesh)
+}
+
+/// Mitsuba's mesh attributes among `element`'s properties (`crate::ply_attributes`), with
+/// its warnings located at the element's header line. Integer colour channels are read as
+/// they are, as Mitsuba reads them, with its warning.
+fn mesh_attributes(
+    file: &Path,
+    element: &Element,
+    kind: &str,
+    reserved: &[&str],
+    warnings: &mut Vec<Warning>,
+) -> Vec<AttributeFields> {
+    let names: Vec<Option<&str>> = element
+        .properties
+        .iter()
+        .map(|p| match p.ty {
+            PropertyType::Scalar(_) => Some(p.name.as_str()),
+            PropertyType::List { .. } => None,
+        })
+        .collect();
+    let at = Location::line(file, element.line);
+    let attributes = group_attributes(kind, &names, reserved, |w| {
+        warnings.push(Warning::new(at.clone(), w))
+    });
+    for a in &attributes {
+        let integer = a.fields.iter().any(
+            |&k| matches!(element.properties[k].ty, PropertyType::Scalar(t) if t.is_integer()),
+        );
+        if integer && a.fields.len() >= 3 {
+            warnings.push(Warning::new(
+                at.clone(),
+                format!(
+                    "mesh attribute '{}' has integer fields: Mitsuba reads them as they are \
+                     (colour attributes are expected to be in [0, 1])",
+                    a.name
+                ),
+            ));
+        }
+    }
+    attributes
+}
+
+/// Appends one entry's values (`row`, by property index) of each of `attributes` to the
+/// mesh's attributes, `times` times, creating those the mesh does not have yet.
+fn push_attribute_values(
+    attributes: &[AttributeFields],
+    row: &[f32],
+    out: &mut Vec<MeshAttribute>,
+    times: usize,
+) {
+    for a in attributes {
+        let i = match out.iter().position(|m| m.name == a.name) {
+            Some(i) => i,
+            None => {
+                out.push(MeshAttribute {
+                    name: a.name.clone(),
+                    channels: a.fields.len() as u32,
+                    values: Vec::new(),
+                });
+                out.len() - 1
+            }
+        };
+        let mut v = Vec3::ZERO;
+        for (c, &k) in a.fields.iter().take(3).enumerate() {
+            v[c] = row[k];
+        }
+        out[i].values.extend(std::iter::repeat_n(v, times));
+    }
 }
 
 /// Triangle strips, `u32::MAX` = restart. Odd triangles swap their first two vertices so all keep

@@ -32,9 +32,10 @@ pub struct Triangles {
     /// Texture coordinates, 3 per triangle, or `None` when no mesh has any. Triangles of meshes
     /// without them carry (0, 0), (1, 0), (0, 1): their barycentric coordinates, as Mitsuba.
     pub uvs: Option<Vec<glam::Vec2>>,
-    /// Vertex colours (a PLY's r, g, b), 3 per triangle, or `None` when no mesh has any;
-    /// black for the triangles of meshes without them.
-    pub colors: Option<Vec<Vec3>>,
+    /// Mitsuba's mesh attributes by name (`vertex_color`, `face_color`, ...): the value at
+    /// each triangle corner, 3 per triangle (a per-face value three times, a number as grey);
+    /// zero for the triangles of meshes without it.
+    pub attributes: Vec<(String, Vec<Vec3>)>,
     /// Index into [`Scene::materials`], 1 per triangle.
     pub materials: Vec<u32>,
 }
@@ -236,13 +237,13 @@ impl Scene {
     }
 
     /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`), then
-    /// the meshes' vertex colours if a texture reads them, the parameter blocks of the
-    /// principled materials (in material order), and the environment map's
+    /// the mesh attributes that textures read, the parameter blocks of the principled
+    /// materials (in material order), and the environment map's
     /// (`EnvironmentMap::gpu_layout`), if any.
     pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
-        let mut data = crate::texture::gpu_textures(&self.textures).0;
-        if crate::texture::uses_vertex_colors(&self.textures) {
-            data.extend(self.gpu_vertex_colors());
+        let mut data = crate::texture::gpu_textures(&self.textures, self.triangles.len()).0;
+        for name in crate::texture::attributes_read(&self.textures) {
+            data.extend(self.gpu_attribute(&name));
         }
         for m in &self.materials {
             if let crate::Bsdf::Principled(p) = m.bsdf {
@@ -257,11 +258,9 @@ impl Scene {
 
     /// Where the principled materials' parameter blocks start in [`Scene::gpu_textures`].
     fn gpu_principled_start(&self) -> u32 {
-        let mut at = crate::texture::gpu_textures_len(&self.textures);
-        if crate::texture::uses_vertex_colors(&self.textures) {
-            at += 3 * self.triangles.len() as u32;
-        }
-        at
+        let attributes = crate::texture::attributes_read(&self.textures).len();
+        crate::texture::gpu_textures_len(&self.textures)
+            + (attributes * 3 * self.triangles.len()) as u32
     }
 
     /// Where the environment map starts in [`Scene::gpu_textures`], plus one (0: no map).
@@ -279,11 +278,11 @@ impl Scene {
         }
     }
 
-    /// The triangles' corner colours (3 per triangle in the scene's order; black where a
-    /// mesh has none), as a vertex-colour texture reads them after the textures.
-    fn gpu_vertex_colors(&self) -> Vec<[f32; 4]> {
-        match &self.triangles.colors {
-            Some(c) => c.iter().map(|c| c.extend(0.0).to_array()).collect(),
+    /// Mesh attribute `name` at the triangles' corners (3 per triangle in the scene's order;
+    /// zero where a mesh has none), as a `mesh_attribute` texture reads it after the textures.
+    fn gpu_attribute(&self, name: &str) -> Vec<[f32; 4]> {
+        match self.triangles.attributes.iter().find(|(n, _)| n == name) {
+            Some((_, c)) => c.iter().map(|c| c.extend(0.0).to_array()).collect(),
             None => vec![[0.0; 4]; 3 * self.triangles.len()],
         }
     }

@@ -304,7 +304,7 @@ fn parse_serialized(bytes: &[u8], path: &Path, index: u32) -> Result<TriMesh, Sc
         positions,
         normals,
         uvs,
-        colors: None,
+        attributes: Vec::new(),
         indices,
     })
 }

@@ -222,7 +222,7 @@ pub fn icosphere(level: u32) -> TriMesh {
     TriMesh {
         normals: Some(positions.clone()),
         uvs: None,
-        colors: None,
+        attributes: Vec::new(),
         positions,
         indices: faces,
     }

@@ -13,8 +13,8 @@ pub const HEADER_LEN: usize = 5;
 /// Header kinds.
 pub const CHECKERBOARD: u32 = 0;
 pub const BITMAP: u32 = 1;
-/// Mitsuba `mesh_attribute` `vertex_color`: header entry 0 holds (kind, start of the
-/// per-triangle corner colours in the array, 0, 0) and entry 3 (scale, 0, 0, 0).
+/// Mitsuba `mesh_attribute`: header entry 0 holds (kind, start of the attribute's values at
+/// the triangle corners in the array, 0, 0) and entry 3 (scale, 0, 0, 0).
 pub const MESH_ATTRIBUTE: u32 = 2;
 /// Header flags: the bitmap's filter and wrap mode.
 pub const FILTER_NEAREST: u32 = 1;
@@ -74,18 +74,18 @@ pub enum Texture {
         wrap: Wrap,
         to_uv: UvTransform,
     },
-    /// Mitsuba `mesh_attribute` named `vertex_color`: the hit triangle's vertex colours
-    /// ([`crate::Triangles::colors`]) interpolated at the hit, times `scale`. It varies with
-    /// the surface point, not with (u, v): [`Texture::eval`] and [`Texture::mean`] give grey
-    /// 0.5 x `scale` for it.
-    VertexColor { scale: f32 },
+    /// Mitsuba `mesh_attribute`: the hit triangle's values of the mesh attribute `name`
+    /// ([`crate::Triangles::attributes`]: `vertex_*` interpolated at the hit, `face_*`
+    /// constant), times `scale`. It varies with the surface point, not with (u, v):
+    /// [`Texture::eval`] and [`Texture::mean`] give grey 0.5 x `scale` for it.
+    MeshAttribute { name: String, scale: f32 },
 }
 
 impl Texture {
     /// The colour at surface coordinates `uv`, as the kernels compute it.
     pub fn eval(&self, uv: Vec2) -> Vec3 {
         match self {
-            Texture::VertexColor { scale } => Vec3::splat(0.5 * scale),
+            Texture::MeshAttribute { scale, .. } => Vec3::splat(0.5 * scale),
             Texture::Checkerboard {
                 color0,
                 color1,
@@ -139,14 +139,14 @@ impl Texture {
             Texture::Bitmap { texels, .. } => {
                 texels.iter().copied().sum::<Vec3>() / texels.len().max(1) as f32
             }
-            Texture::VertexColor { scale } => Vec3::splat(0.5 * scale),
+            Texture::MeshAttribute { scale, .. } => Vec3::splat(0.5 * scale),
         }
     }
 
     fn to_uv(&self) -> UvTransform {
         match self {
             Texture::Checkerboard { to_uv, .. } | Texture::Bitmap { to_uv, .. } => *to_uv,
-            Texture::VertexColor { .. } => UvTransform::IDENTITY,
+            Texture::MeshAttribute { .. } => UvTransform::IDENTITY,
         }
     }
 }
@@ -196,12 +196,14 @@ fn gpu_len(t: &Texture) -> u32 {
     HEADER_LEN as u32
         + match t {
             Texture::Bitmap { texels, .. } => texels.len() as u32,
-            Texture::Checkerboard { .. } | Texture::VertexColor { .. } => 0,
+            Texture::Checkerboard { .. } | Texture::MeshAttribute { .. } => 0,
         }
 }
 
-/// Every texture of a scene in the kernels' layout, and where each one's header starts.
-pub fn gpu_textures(textures: &[Texture]) -> (Vec<[f32; 4]>, Vec<u32>) {
+/// Every texture of a scene in the kernels' layout, and where each one's header starts. The
+/// mesh attributes that textures read ([`attributes_read`]) follow, in that order, each
+/// with a value per triangle corner (`3 * triangles` entries): their headers point there.
+pub fn gpu_textures(textures: &[Texture], triangles: usize) -> (Vec<[f32; 4]>, Vec<u32>) {
     let mut data = Vec::new();
     let mut starts = Vec::new();
     for t in textures {
@@ -229,8 +231,8 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<[f32; 4]>, Vec<u32>) {
                 };
                 (BITMAP, *width, *height, flags, Vec3::ZERO, Vec3::ZERO)
             }
-            // The colours follow every texture: their start is filled in below.
-            Texture::VertexColor { scale } => (
+            // The values follow every texture: their start is filled in below.
+            Texture::MeshAttribute { scale, .. } => (
                 MESH_ATTRIBUTE,
                 0,
                 0,
@@ -250,20 +252,28 @@ pub fn gpu_textures(textures: &[Texture]) -> (Vec<[f32; 4]>, Vec<u32>) {
         }
     }
     let total = data.len() as u32;
+    let read = attributes_read(textures);
     for (t, &start) in textures.iter().zip(&starts) {
-        if let Texture::VertexColor { .. } = t {
-            data[start as usize][1] = f32::from_bits(total);
+        if let Texture::MeshAttribute { name, .. } = t {
+            let block = read.iter().position(|n| n == name).unwrap() as u32;
+            data[start as usize][1] = f32::from_bits(total + block * 3 * triangles as u32);
         }
     }
     (data, starts)
 }
 
-/// Whether any of `textures` reads the meshes' vertex colours (which then follow the
-/// textures in the kernels' array: `Scene::gpu_textures`).
-pub fn uses_vertex_colors(textures: &[Texture]) -> bool {
-    textures
-        .iter()
-        .any(|t| matches!(t, Texture::VertexColor { .. }))
+/// The names of the mesh attributes that `textures` read, each once, in first-use order
+/// (their values follow the textures in the kernels' array: `Scene::gpu_textures`).
+pub fn attributes_read(textures: &[Texture]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for t in textures {
+        if let Texture::MeshAttribute { name, .. } = t {
+            if !names.contains(name) {
+                names.push(name.clone());
+            }
+        }
+    }
+    names
 }
 
 #[cfg(test)]

@@ -394,8 +394,9 @@ fn normal_and_bump_maps_are_read_as_mitsuba_reads_them() {
     }
 }
 
-/// `mesh_attribute` `vertex_color`: a PLY's r, g, b reach the triangles' corners; a mesh
-/// without them, another attribute name, or the texture where an image is needed are errors.
+/// `mesh_attribute`: a PLY's r, g, b reach the triangles' corners as `vertex_color`; a mesh
+/// without the attribute, a name Mitsuba refuses, or the texture where an image is needed
+/// are errors.
 #[test]
 fn vertex_colors_are_read_as_mitsuba_reads_them() {
     let dir =
@@ -409,7 +410,8 @@ fn vertex_colors_are_read_as_mitsuba_reads_them() {
     let s = load_mitsuba_str(&shape("ply", "vertex_color"), &dir)
         .unwrap()
         .scene;
-    let colors = s.triangles.colors.as_ref().expect("vertex colours");
+    let (name, colors) = &s.triangles.attributes[0];
+    assert_eq!(name, "vertex_color");
     assert_eq!(colors.len(), 3 * s.triangles.len());
     // The first grid triangle's first corner: x = -1, y = -1 in the file: (0.9, 0, 0).
     assert!(
@@ -418,26 +420,130 @@ fn vertex_colors_are_read_as_mitsuba_reads_them() {
         colors[0]
     );
     let t = s.materials[0].texture.unwrap();
-    assert!(matches!(s.textures[t as usize], Texture::VertexColor { scale } if scale == 2.0));
+    assert!(
+        matches!(&s.textures[t as usize], Texture::MeshAttribute { name, scale } if name == "vertex_color" && *scale == 2.0)
+    );
 
     let e = load_mitsuba_str(&shape("obj", "vertex_color"), &dir).unwrap_err();
     assert!(
-        e.message.contains("no vertex colours") && e.location.line_number() == Some(2),
+        e.message.contains("no mesh attribute 'vertex_color'")
+            && e.location.line_number() == Some(2),
         "{e}"
     );
     let e = load_mitsuba_str(&shape("ply", "face_normal"), &dir).unwrap_err();
-    assert!(e.message.contains("only 'vertex_color'"), "{e}");
+    assert!(
+        e.message.contains("no mesh attribute 'face_normal'") && e.message.contains("vertex_color"),
+        "{e}"
+    );
+    let e = load_mitsuba_str(&shape("ply", "color"), &dir).unwrap_err();
+    assert!(e.message.contains("start with 'vertex_' or 'face_'"), "{e}");
     let e = load_mitsuba_str(
-        "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n<bsdf type=\"mask\"><texture type=\"mesh_attribute\" name=\"opacity\"><string name=\"name\" value=\"vertex_color\"/></texture><bsdf type=\"diffuse\"/></bsdf>\n</shape>\n</scene>",
+        "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n<emitter type=\"area\"><texture type=\"mesh_attribute\" name=\"radiance\"><string name=\"name\" value=\"vertex_color\"/></texture></emitter>\n</shape>\n</scene>",
         &dir,
     )
     .unwrap_err();
-    assert!(e.message.contains("cannot be a mask's opacity"), "{e}");
+    assert!(e.location.line_number() == Some(3), "{e}");
+}
+
+/// Mitsuba's other mesh attributes: per-face colours (a polygon's for each triangle of its
+/// fan), one-channel attributes (`{prefix}_x`) read as grey or as a number (a mask's
+/// opacity, a blend's weight), and the errors Mitsuba's scalar variants raise: a
+/// three-channel attribute read as a number.
+#[test]
+fn face_and_one_channel_attributes() {
+    let dir = std::env::temp_dir().join(format!("cohort-attributes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("quad.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nproperty float weight_x\nelement face 2\nproperty list uchar int vertex_indices\nproperty float red\nproperty float green\nproperty float blue\nend_header\n\
+         0 0 0 0.25\n1 0 0 0.5\n1 1 0 0.75\n0 1 0 1\n2 0 0 0\n\
+         4 0 1 2 3 0.1 0.2 0.3\n3 1 4 2 0.4 0.5 0.6\n",
+    )
+    .unwrap();
+    let load = |bsdf: &str| {
+        load_mitsuba_str(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"ply\">\n<string name=\"filename\" value=\"quad.ply\"/>\n{bsdf}\n</shape>\n</scene>"
+            ),
+            &dir,
+        )
+    };
+    let attribute = |name: &str| {
+        format!("<texture type=\"mesh_attribute\" name=\"reflectance\"><string name=\"name\" value=\"{name}\"/></texture>")
+    };
+    let s = load(&format!(
+        "<bsdf type=\"diffuse\">{}</bsdf>",
+        attribute("face_color")
+    ))
+    .unwrap()
+    .scene;
+    assert_eq!(s.triangles.len(), 3);
+    let faces = &s
+        .triangles
+        .attributes
+        .iter()
+        .find(|(n, _)| n == "face_color")
+        .unwrap()
+        .1;
+    let quad = Vec3::new(0.1, 0.2, 0.3);
+    let triangle = Vec3::new(0.4, 0.5, 0.6);
+    assert_eq!(
+        faces[..6],
+        [quad; 6],
+        "the quad's colour for both of its triangles"
+    );
+    assert_eq!(faces[6..], [triangle; 3]);
+    let weights = &s
+        .triangles
+        .attributes
+        .iter()
+        .find(|(n, _)| n == "vertex_weight")
+        .unwrap()
+        .1;
+    assert_eq!(
+        weights[..3],
+        [Vec3::splat(0.25), Vec3::splat(0.5), Vec3::splat(0.75)]
+    );
+
+    // One channel, as a number: a mask's opacity and a blend's weight.
+    let opacity = attribute("vertex_weight").replace("reflectance", "opacity");
+    let s = load(&format!(
+        "<bsdf type=\"mask\">{opacity}<bsdf type=\"diffuse\"/></bsdf>"
+    ))
+    .unwrap()
+    .scene;
+    let mask = s.materials[0].mask.unwrap();
+    assert!(
+        matches!(&s.textures[mask.texture.unwrap() as usize], Texture::MeshAttribute { name, .. } if name == "vertex_weight")
+    );
+    let weight = attribute("vertex_weight").replace("reflectance", "weight");
+    load(&format!("<bsdf type=\"blendbsdf\">{weight}<bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf>")).unwrap();
+
+    // Three channels read as a number: Mitsuba's eval_1 throws.
+    let opacity = attribute("face_color").replace("reflectance", "opacity");
+    let e = load(&format!(
+        "<bsdf type=\"mask\">{opacity}<bsdf type=\"diffuse\"/></bsdf>"
+    ))
+    .unwrap_err();
+    assert!(
+        e.message.contains("has 3 channels")
+            && e.message.contains("read as a number")
+            && e.location.line_number() == Some(2),
+        "{e}"
+    );
+    // The second BSDF of a blend is checked too.
+    let e = load(&format!(
+        "<bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.5\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\">{}</bsdf></bsdf>",
+        attribute("face_weight")
+    ))
+    .unwrap_err();
+    assert!(e.message.contains("no mesh attribute 'face_weight'"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `blendbsdf` weights given as textures: their luminance per hit (a checkerboard read as a
-/// number, as Mitsuba's `eval_1` reads it); a textured weight with the nested blend first,
-/// or a `mesh_attribute` weight, are errors.
+/// number, as Mitsuba's `eval_1` reads it); a textured weight with the nested blend first
+/// and a weight outside [0, 1] are errors.
 #[test]
 fn textured_blend_weights_are_read() {
     let load = |bsdf: &str| {

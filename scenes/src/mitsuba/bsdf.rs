@@ -499,9 +499,6 @@ fn mask<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let (colour, texture) = ctx
         .color_or_texture(obj, "opacity")?
         .unwrap_or((Vec3::splat(0.5), None));
-    if let Some(i) = texture {
-        super::texture::image_only(ctx, i, obj.loc_of("opacity"), "a mask's opacity")?;
-    }
     let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
     let opacity = crate::texture::luminance(colour);
     obj.finish(&mut ctx.diag)?;
@@ -523,9 +520,6 @@ fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> 
             "blendbsdf needs a 'weight' (as in Mitsuba)",
         ));
     };
-    if let Some(i) = texture {
-        super::texture::image_only(ctx, i, obj.loc_of("weight"), "a blend's weight")?;
-    }
     let texture = texture.map(|i| super::texture::scalar_use(ctx, i));
     let weight = crate::texture::luminance(colour);
     if texture.is_none() && !(0.0..=1.0).contains(&weight) {

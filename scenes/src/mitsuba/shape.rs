@@ -19,6 +19,69 @@ use super::props::Obj;
 use super::xml::{resolve, show_list};
 use super::Ctx;
 
+/// Mitsuba evaluates a `mesh_attribute` texture on the shape it is hit on: the shape must
+/// have the attribute, and where the texture is read as a number (a mask's opacity, a
+/// blend's weight: `eval_1`), the attribute must be a number (Mitsuba's scalar variants
+/// throw otherwise). Either mistake is an error at the shape.
+fn check_mesh_attributes(
+    ctx: &Ctx,
+    parsed: &ParsedBsdf,
+    mesh: &TriMesh,
+    at: &Location,
+    shape: &str,
+) -> Result<(), SceneError> {
+    // (texture, read as a number) of the BSDF and of each BSDF it blends with.
+    let mut reads = Vec::new();
+    let mut next = Some(*parsed);
+    let mut depth = 0;
+    while let Some(b) = next.take() {
+        reads.extend(b.texture.map(|t| (t, false)));
+        reads.extend(b.mask.and_then(|m| m.texture).map(|t| (t, true)));
+        if let Some((_, weight, part)) = b.blend {
+            reads.extend(weight.map(|t| (t, true)));
+            depth += 1;
+            if depth < 8 {
+                next = Some(ctx.blend_parts[part as usize]);
+            }
+        }
+    }
+    for (t, number) in reads {
+        let crate::texture::Texture::MeshAttribute { name, .. } = &ctx.textures[t as usize] else {
+            continue;
+        };
+        let Some(a) = mesh.attributes.iter().find(|a| a.name == *name) else {
+            let have: Vec<&str> = mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+            return Err(syntax(
+                at,
+                format!(
+                    "shape {shape} has no mesh attribute '{name}' for its 'mesh_attribute' \
+                     texture (it has: {}; a PLY's r, g, b give 'vertex_color')",
+                    if have.is_empty() {
+                        "none".to_string()
+                    } else {
+                        have.join(", ")
+                    }
+                ),
+            ));
+        };
+        if a.channels == 4 || (number && a.channels != 1) {
+            let wanted = if number {
+                "1 (it is read as a number)"
+            } else {
+                "1 or 3"
+            };
+            return Err(syntax(
+                at,
+                format!(
+                    "mesh attribute '{name}' of shape {shape} has {} channels; Mitsuba reads {wanted}",
+                    a.channels
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Segments around a tessellated disk or cylinder.
 const ROUND_SEGMENTS: u32 = 128;
 
@@ -306,28 +369,7 @@ fn add_placed<'a>(
         },
         (None, None) => DEFAULT_BSDF,
     };
-    // Mitsuba: a mesh without the attribute a `mesh_attribute` texture reads is an error.
-    let reads_colors = |b: &ParsedBsdf| {
-        b.texture.is_some_and(|t| {
-            matches!(
-                ctx.textures[t as usize],
-                crate::texture::Texture::VertexColor { .. }
-            )
-        })
-    };
-    let blend_part = parsed
-        .blend
-        .map(|(_, _, part)| ctx.blend_parts[part as usize]);
-    if mesh.colors.is_none()
-        && (reads_colors(&parsed) || blend_part.is_some_and(|b| reads_colors(&b)))
-    {
-        return Err(syntax(
-            &obj.loc,
-            format!(
-                "shape '{name}' has no vertex colours (a PLY's r, g, b) for its 'mesh_attribute' texture"
-            ),
-        ));
-    }
+    check_mesh_attributes(ctx, &parsed, &mesh, &obj.loc, &name)?;
     let material = register_material(ctx, builder, parsed, emission);
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));

@@ -25,10 +25,11 @@ pub(crate) fn image_only(
     what: &str,
 ) -> Result<(), SceneError> {
     match ctx.textures[i as usize] {
-        Texture::VertexColor { .. } => Err(syntax(
+        Texture::MeshAttribute { .. } => Err(syntax(
             at,
             format!(
-                "a 'mesh_attribute' texture cannot be {what} (it colours a BSDF's reflectance only)"
+                "a 'mesh_attribute' texture cannot be {what} (it is read at surface points: a \
+                 BSDF's colour, a mask's opacity or a blend's weight)"
             ),
         )),
         _ => Ok(()),
@@ -48,7 +49,7 @@ pub(crate) fn texture_index<'a>(ctx: &mut Ctx<'a>, t: &'a Obj) -> Result<u32, Sc
             color1: ctx.color(t, "color1")?.unwrap_or(Vec3::splat(0.2)),
             to_uv,
         },
-        "mesh_attribute" => vertex_color(t)?,
+        "mesh_attribute" => mesh_attribute(t)?,
         _ => bitmap(ctx, t, to_uv)?,
     };
     t.finish(&mut ctx.diag)?;
@@ -58,21 +59,27 @@ pub(crate) fn texture_index<'a>(ctx: &mut Ctx<'a>, t: &'a Obj) -> Result<u32, Sc
     Ok(i)
 }
 
-/// Mitsuba `mesh_attribute`: `name` (`vertex_color`, the PLY's r, g, b) and `scale`.
-fn vertex_color(t: &Obj) -> Result<Texture, SceneError> {
-    let name = t.string("name")?.unwrap_or_default();
-    if name != "vertex_color" {
-        let why = if name.starts_with("vertex_") || name.starts_with("face_") {
-            "only 'vertex_color' is supported"
-        } else {
-            "Mitsuba's names start with 'vertex_' or 'face_'"
-        };
+/// Mitsuba `mesh_attribute`: `name` (a mesh attribute: `vertex_color` from a PLY's r, g, b,
+/// `face_color`, any other `vertex_*` / `face_*` property group) and `scale`. Whether the
+/// shape has the attribute is checked where the shape uses the texture.
+fn mesh_attribute(t: &Obj) -> Result<Texture, SceneError> {
+    let Some(name) = t.string("name")? else {
+        return Err(syntax(
+            &t.loc,
+            "texture 'mesh_attribute' needs a 'name' (as in Mitsuba)",
+        ));
+    };
+    if !name.starts_with("vertex_") && !name.starts_with("face_") {
         return Err(syntax(
             t.loc_of("name"),
-            format!("texture 'mesh_attribute': attribute '{name}' ({why})"),
+            format!(
+                "texture 'mesh_attribute': attribute '{name}' (Mitsuba's names start with \
+                 'vertex_' or 'face_')"
+            ),
         ));
     }
-    Ok(Texture::VertexColor {
+    Ok(Texture::MeshAttribute {
+        name,
         scale: t.float("scale")?.unwrap_or(1.0),
     })
 }
@@ -148,6 +155,6 @@ pub(crate) fn scalar_use(ctx: &mut Ctx, i: u32) -> u32 {
             ctx.textures.push(swapped);
             (ctx.textures.len() - 1) as u32
         }
-        Texture::Bitmap { .. } | Texture::VertexColor { .. } => i,
+        Texture::Bitmap { .. } | Texture::MeshAttribute { .. } => i,
     }
 }
