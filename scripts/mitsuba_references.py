@@ -627,6 +627,36 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # Anisotropic rough conductors: a GGX sphere stretched along dp/du, a Beckmann one whose
+    # alpha_u and alpha_v are checkerboards (read as numbers), and an OBJ quad whose
+    # alpha_u is a bitmap (its texture coordinates turn the anisotropy).
+    "roughconductor_anisotropic": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="roughconductor"><string name="distribution" value="ggx"/><string name="material" value="Cu"/>
+            <float name="alpha_u" value="0.4"/><float name="alpha_v" value="0.04"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.5, 0.95, -0.4"/><float name="radius" value="0.3"/>
+        <bsdf type="roughconductor"><string name="distribution" value="beckmann"/><string name="material" value="Al"/>
+            <texture type="checkerboard" name="alpha_u"><float name="color0" value="0.05"/><float name="color1" value="0.4"/>
+                <transform name="to_uv"><scale x="6" y="6"/></transform></texture>
+            <texture type="checkerboard" name="alpha_v"><float name="color0" value="0.3"/><float name="color1" value="0.08"/>
+                <transform name="to_uv"><scale x="6" y="6"/></transform></texture>
+        </bsdf>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="meshes/textured_quad.obj"/>
+        <transform name="to_world"><scale value="0.5"/><rotate y="1" angle="20"/><translate x="0.1" y="1.3" z="-0.95"/></transform>
+        <bsdf type="roughconductor"><string name="distribution" value="ggx"/><string name="material" value="Au"/>
+            <texture type="bitmap" name="alpha_u"><string name="filename" value="textures/stripes.png"/></texture>
+            <float name="alpha_v" value="0.05"/>
+        </bsdf>
+    </shape>""",
+    ),
     # Textures: checkerboards on the rectangle (the floor, scaled by to_uv), on the cube's
     # faces and on a sphere; a PNG bitmap (textures/stripes.png, see write_png) on the back
     # wall (bilinear), on an OBJ quad with its own texture coordinates, and as a plastic's
@@ -908,6 +938,40 @@ SCENES = {
             <rgb name="base_color" value="0.9, 0.7, 0.3"/>
             <float name="roughness" value="0.35"/><float name="anisotropic" value="0.7"/>
             <float name="metallic" value="0.8"/><float name="specular" value="0.7"/>
+        </bsdf>
+    </shape>""",
+    ),
+    # Principled numbers as textures (read as numbers per hit): a sphere whose roughness,
+    # anisotropy, metallic, sheen and clearcoat are checkerboards, and a principledthin cube
+    # whose specular and diffuse transmission are a bitmap's luminance and a checkerboard.
+    "principled_textured": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="sphere">
+        <point name="center" value="-0.4, 0.4, 0.1"/><float name="radius" value="0.35"/>
+        <bsdf type="principled">
+            <rgb name="base_color" value="0.2, 0.7, 0.3"/>
+            <texture type="checkerboard" name="roughness"><float name="color0" value="0.35"/><float name="color1" value="0.7"/>
+                <transform name="to_uv"><scale x="4" y="4"/></transform></texture>
+            <texture type="checkerboard" name="anisotropic"><float name="color0" value="0.8"/><float name="color1" value="0.05"/>
+                <transform name="to_uv"><scale x="6" y="6"/></transform></texture>
+            <texture type="checkerboard" name="metallic"><float name="color0" value="0.7"/><float name="color1" value="0.1"/>
+                <transform name="to_uv"><scale x="4" y="4"/></transform></texture>
+            <texture type="checkerboard" name="sheen"><float name="color0" value="0.2"/><float name="color1" value="0.9"/>
+                <transform name="to_uv"><scale x="3" y="3"/></transform></texture>
+            <texture type="checkerboard" name="clearcoat"><float name="color0" value="0.9"/><float name="color1" value="0.1"/>
+                <transform name="to_uv"><scale x="3" y="3"/></transform></texture>
+            <float name="specular" value="0.7"/>
+        </bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="30"/><translate x="0.45" y="0.6" z="-0.3"/></transform>
+        <bsdf type="principledthin">
+            <rgb name="base_color" value="0.9, 0.6, 0.3"/><float name="roughness" value="0.4"/>
+            <texture type="bitmap" name="spec_trans"><string name="filename" value="textures/stripes.png"/></texture>
+            <texture type="checkerboard" name="diff_trans"><float name="color0" value="0.2"/><float name="color1" value="1.5"/>
+                <transform name="to_uv"><scale x="2" y="2"/></transform></texture>
         </bsdf>
     </shape>""",
     ),

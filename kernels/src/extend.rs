@@ -421,7 +421,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // The material's colour (diffuse, plastic base, conductor reflectance), or its
                 // texture's here.
                 let mut uv = Vec2::ZERO;
-                if m.texture != 0 || m.opacity_texture != 0 || m.perturb_texture != 0 {
+                if m.texture != 0
+                    || m.opacity_texture != 0
+                    || m.perturb_texture != 0
+                    || m.flags & READS_UV != 0
+                {
                     uv = hit_uv(tex_coords, t.original, h);
                 }
                 // Mitsuba `normalmap` / `bumpmap`: the BSDF shades around the perturbed
@@ -580,7 +584,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 let fr = crate::principled::frame(
                                     m, textures, tex_coords, t, ng, n, front,
                                 );
-                                let pp = crate::principled::params(textures, m, albedo);
+                                let pp = crate::principled::params(
+                                    textures, m, albedo, uv, t.original, h,
+                                );
                                 let e = crate::principled::eval_kind(
                                     pp,
                                     m.kind,
@@ -599,11 +605,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 fc = e.truncate();
                                 pdf_b = e.w;
                             } else {
-                                let fr = crate::sampling::frame(n);
-                                let e = microfacet_eval(
+                                let fr =
+                                    crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
+                                let a =
+                                    crate::rough_conductor::alpha(textures, m, uv, t.original, h);
+                                let e = crate::microfacet::conductor_eval(
                                     fr.transpose() * -d,
                                     fr.transpose() * wi,
-                                    m.param,
+                                    a,
                                     m.flags & BECKMANN != 0,
                                 );
                                 fc = albedo
@@ -736,7 +745,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     thr = thr * albedo * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
                     alive = true;
                 } else if glossy {
-                    let fr = crate::sampling::frame(n);
+                    let fr = crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
+                    let a = crate::rough_conductor::alpha(textures, m, uv, t.original, h);
                     let wo = fr.transpose() * -d;
                     // VNDF sampling maps the unit square onto the visible normals preserving
                     // measure, so a shared cell of the square keeps each ray's pdf unchanged.
@@ -745,9 +755,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
                     }
                     let beckmann = m.flags & BECKMANN != 0;
-                    let mn = microfacet_sample(wo, m.param, beckmann, ug);
+                    let mn = crate::microfacet::visible_sample(wo, a, beckmann, ug);
                     let wi = mn * (2.0 * wo.dot(mn)) - wo;
-                    let e = microfacet_eval(wo, wi, m.param, beckmann);
+                    let e = crate::microfacet::conductor_eval(wo, wi, a, beckmann);
                     if wi.z > 0.0 && e.y > 0.0 {
                         new_d = fr * wi;
                         let fresnel = fresnel_conductor(e.z, m.transmittance, m.conductor_k);
@@ -758,7 +768,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                 } else if principled {
                     let fr = crate::principled::frame(m, textures, tex_coords, t, ng, n, front);
-                    let pp = crate::principled::params(textures, m, albedo);
+                    let pp = crate::principled::params(textures, m, albedo, uv, t.original, h);
                     let wi_l = fr.transpose() * -d;
                     let wl = crate::principled::sample_kind(pp, m.kind, wi_l, u, uniform(key, 4));
                     if wl.dot(wl) > 0.0 {

@@ -68,6 +68,9 @@ pub const BUMP_MAP: u32 = 64;
 pub const NO_SHADOWING: u32 = 128;
 pub const NO_FLIP: u32 = 256;
 pub const PERTURB_PER_SIDE: u32 = 512;
+/// `Material::flags`: the BSDF reads textured parameters, or turns with dp/du, at the hit's
+/// texture coordinates (`cohort_scenes::GpuMaterial::FLAG_READS_UV`).
+pub const READS_UV: u32 = 1024;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]

@@ -51,6 +51,40 @@ pub fn hit_tangents(tex_coords: &[Vec4], original: u32, tri: Triangle, ng: Vec3)
     )
 }
 
+/// The shading frame Mitsuba evaluates a BSDF in at a hit on triangle `tri` (geometric
+/// normal `ng`; `n` the shading normal turned to the viewer, `front` whether it was
+/// already): columns s, t and the normal, where s is dp/du made orthogonal to the normal
+/// if `with_tangent` (an anisotropic BSDF needs it; an isotropic one takes any tangent).
+/// Under `two_sided` the back side is mirrored to the front, as Mitsuba's `twosided` flips
+/// the local z.
+#[kernel_fn]
+#[allow(clippy::too_many_arguments)]
+pub fn tangent_frame(
+    tex_coords: &[Vec4],
+    tri: Triangle,
+    ng: Vec3,
+    n: Vec3,
+    front: bool,
+    two_sided: bool,
+    with_tangent: bool,
+) -> Mat3 {
+    let mut ns = n;
+    if !front {
+        ns = -n;
+    }
+    let mut z = ns;
+    if two_sided {
+        z = n;
+    }
+    let mut r = crate::sampling::frame(z);
+    if with_tangent {
+        let tg = hit_tangents(tex_coords, tri.original, tri, ng);
+        let s = shading_tangent(tg.x_axis, ns);
+        r = Mat3::from_cols(s, ns.cross(s), z);
+    }
+    r
+}
+
 /// Mitsuba's shading tangent: dp/du made orthogonal to the shading normal `ns` (any tangent
 /// where dp/du vanishes or is parallel to `ns`).
 #[kernel_fn]

@@ -13,6 +13,7 @@
 //! Transmission omits Mitsuba's radiance scale 1 / eta², as `rough_dielectric` does.
 
 use crate::layout::*;
+use crate::microfacet::{ggx_d, ggx_g1, visible_pdf, visible_sample};
 use crate::sampling::{concentric_disk, fresnel_dielectric};
 use crate::texture::luminance;
 use cohort::prelude::*;
@@ -20,28 +21,39 @@ use cohort::prelude::*;
 const INV_PI: f32 = core::f32::consts::FRAC_1_PI;
 
 /// The parameters of material `m` (kind `PRINCIPLED` or `PRINCIPLED_THIN`) with base
-/// colour `base_color`: its parameter block (`m.table`), laid out by
-/// `cohort_scenes::Principled::gpu_block`.
+/// colour `base_color`, at hit `h` of triangle `original` (texture coordinates `uv`): its
+/// parameter block (`m.table`), laid out by `cohort_scenes::Principled::gpu_block`, with
+/// each textured parameter read there.
 #[kernel_fn]
-pub fn params(textures: &[Vec4], m: Material, base_color: Vec3) -> Principled {
+pub fn params(
+    textures: &[Vec4],
+    m: Material,
+    base_color: Vec3,
+    uv: Vec2,
+    original: u32,
+    h: Vec4,
+) -> Principled {
     let at = (m.table - 1) as usize;
     let a = textures[at];
     let b = textures[at + 1];
     let c = textures[at + 2];
     let r = textures[at + 3];
+    let ta = textures[at + 4];
+    let tb = textures[at + 5];
+    let tc = textures[at + 6];
     Principled {
         base_color,
-        roughness: a.x,
-        anisotropic: a.y,
-        metallic: a.z,
-        spec_trans: a.w,
-        spec_tint: b.x,
-        sheen: b.y,
-        sheen_tint: b.z,
-        clearcoat: b.w,
-        clearcoat_gloss: c.x,
-        flatness: c.y,
-        diff_trans: c.z,
+        roughness: number_at(textures, ta.x, a.x, uv, original, h),
+        anisotropic: number_at(textures, ta.y, a.y, uv, original, h),
+        metallic: number_at(textures, ta.z, a.z, uv, original, h),
+        spec_trans: number_at(textures, ta.w, a.w, uv, original, h),
+        spec_tint: number_at(textures, tb.x, b.x, uv, original, h),
+        sheen: number_at(textures, tb.y, b.y, uv, original, h),
+        sheen_tint: number_at(textures, tb.z, b.z, uv, original, h),
+        clearcoat: number_at(textures, tb.w, b.w, uv, original, h),
+        clearcoat_gloss: number_at(textures, tc.x, c.x, uv, original, h),
+        flatness: number_at(textures, tc.y, c.y, uv, original, h),
+        diff_trans: number_at(textures, tc.z, c.z, uv, original, h),
         eta: c.w,
         rate_a: r.x,
         rate_b: r.y,
@@ -49,6 +61,31 @@ pub fn params(textures: &[Vec4], m: Material, base_color: Vec3) -> Principled {
         rate_d: r.w,
         pad: 0,
     }
+}
+
+/// A parameter given as `value`, or, where `header` holds a texture's header + 1 (as
+/// bits), that texture read as a number at the hit (Mitsuba's `eval_1`: its luminance).
+#[kernel_fn]
+pub fn number_at(
+    textures: &[Vec4],
+    header: f32,
+    value: f32,
+    uv: Vec2,
+    original: u32,
+    h: Vec4,
+) -> f32 {
+    let k = header.to_bits();
+    let mut v = value;
+    if k != 0 {
+        v = luminance(crate::texture::texture_at_hit(
+            textures,
+            k - 1,
+            uv,
+            original,
+            h,
+        ));
+    }
+    v
 }
 
 /// Schlick's weight (1 - cos)^5, with 1 - cos clamped to [0, 1].
@@ -104,72 +141,6 @@ pub fn dist_alpha(roughness: f32, anisotropic: f32) -> Vec2 {
     let r2 = roughness * roughness;
     let aspect = (1.0 - 0.9 * anisotropic).sqrt();
     Vec2::new((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
-}
-
-/// Anisotropic GGX D(m), zero where D cos θ_m is below 1e-20 (as Mitsuba).
-#[kernel_fn]
-pub fn ggx_d(m: Vec3, a: Vec2) -> f32 {
-    let x = m.x / a.x;
-    let y = m.y / a.y;
-    let t = x * x + y * y + m.z * m.z;
-    let d = 1.0 / (core::f32::consts::PI * a.x * a.y * t * t);
-    let mut r = 0.0f32;
-    if d * m.z > 1.0e-20 {
-        r = d;
-    }
-    r
-}
-
-/// Smith's masking of direction `v` for microfacet `m` (anisotropic GGX): zero where `v`
-/// sees the microfacet's back.
-#[kernel_fn]
-pub fn ggx_g1(v: Vec3, m: Vec3, a: Vec2) -> f32 {
-    let ax = a.x * v.x;
-    let ay = a.y * v.y;
-    let xy = ax * ax + ay * ay;
-    let mut g = 2.0 / (1.0 + (1.0 + xy / (v.z * v.z)).sqrt());
-    if xy == 0.0 {
-        g = 1.0;
-    }
-    if v.dot(m) * v.z <= 0.0 {
-        g = 0.0;
-    }
-    g
-}
-
-/// The density of visible normal `m` for a viewer at `wi` (z > 0): D G1 |wi·m| / wi.z.
-#[kernel_fn]
-pub fn visible_pdf(wi: Vec3, m: Vec3, a: Vec2) -> f32 {
-    ggx_d(m, a) * ggx_g1(wi, m, a) * wi.dot(m).abs() / wi.z
-}
-
-/// A GGX normal visible from `wi` (z > 0), by Mitsuba's mapping of `u`: the viewer
-/// stretched to roughness 1, `sample_visible_11`'s slope, rotated back and unstretched.
-#[kernel_fn]
-pub fn visible_sample(wi: Vec3, a: Vec2, u: Vec2) -> Vec3 {
-    let wp = Vec3::new(a.x * wi.x, a.y * wi.y, wi.z).normalize();
-    let sin2 = 1.0 - wp.z * wp.z;
-    let mut cos_phi = 1.0f32;
-    let mut sin_phi = 0.0f32;
-    // Mitsuba's 4 x drjit's epsilon (2^-24).
-    if sin2.abs() > 2.384_185_8e-7 {
-        let inv = 1.0 / sin2.sqrt();
-        cos_phi = (wp.x * inv).clamp(-1.0, 1.0);
-        sin_phi = (wp.y * inv).clamp(-1.0, 1.0);
-    }
-    let cos_theta = wp.z;
-    let p = concentric_disk(u);
-    let s = 0.5 * (1.0 + cos_theta);
-    let x = p.x;
-    let y = (1.0 - x * x).max(0.0).sqrt() * (1.0 - s) + p.y * s;
-    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    let norm = 1.0 / (sin_theta * y + cos_theta * z);
-    let slope_x = (cos_theta * y - sin_theta * z) * norm;
-    let slope_y = x * norm;
-    let sx = (cos_phi * slope_x - sin_phi * slope_y) * a.x;
-    let sy = (sin_phi * slope_x + cos_phi * slope_y) * a.y;
-    Vec3::new(-sx, -sy, 1.0).normalize()
 }
 
 /// Mitsuba's cosine-weighted hemisphere (through the concentric disk).
@@ -417,7 +388,7 @@ pub fn eval(p: Principled, wi: Vec3, wo: Vec3) -> Vec4 {
             wi_up = -wi;
         }
         if reflect_ok {
-            pdf += p_reflect * visible_pdf(wi_up, wh, a) * dwh;
+            pdf += p_reflect * visible_pdf(wi_up, wh, a, false) * dwh;
             if p.clearcoat != 0.0 {
                 let mut cc = 0.0f32;
                 if wh.z >= 0.0 {
@@ -430,7 +401,7 @@ pub fn eval(p: Principled, wi: Vec3, wo: Vec3) -> Vec4 {
             pdf += probs.x * INV_PI * co;
         }
         if p.spec_trans != 0.0 && refract_ok {
-            pdf += probs.z * visible_pdf(wi_up, wh, a) * dwh;
+            pdf += probs.z * visible_pdf(wi_up, wh, a, false) * dwh;
         }
     }
     value.extend(pdf)
@@ -451,7 +422,7 @@ pub fn sample(p: Principled, wi: Vec3, u: Vec2, choice: f32) -> Vec3 {
         if !front {
             wi_up = -wi;
         }
-        let m = visible_sample(wi_up, a, u);
+        let m = visible_sample(wi_up, a, false, u);
         let cim = wi.dot(m);
         let f = fresnel_signed(cim, p.eta);
         let probs = lobe_probabilities(p, f, front);
@@ -551,12 +522,12 @@ pub fn thin_eval(p: Principled, wi0: Vec3, wo0: Vec3) -> Vec4 {
                 }
                 let g = ggx_g1(wi, wh, a) * ggx_g1(wo, wh, a);
                 value += ft * (p.spec_trans * ggx_d(wh, a) * g / (4.0 * ci));
-                pdf += probs.x * visible_pdf(wi, wh, a) * dwh;
+                pdf += probs.x * visible_pdf(wi, wh, a, false) * dwh;
             }
             if refract_ok {
                 let g = ggx_g1(wi, wh, at) * ggx_g1(wo, wh, at);
                 value += p.base_color * (p.spec_trans * (1.0 - f) * ggx_d(wh, at) * g / (4.0 * ci));
-                pdf += probs.y * visible_pdf(wi, wh, at) * dwh;
+                pdf += probs.y * visible_pdf(wi, wh, at, false) * dwh;
             }
         }
         if reflect && p.spec_trans < 1.0 && dt < 1.0 {
@@ -592,12 +563,12 @@ pub fn thin_sample(p: Principled, wi0: Vec3, u: Vec2, choice: f32) -> Vec3 {
         let probs = thin_probabilities(p);
         let mut ok = true;
         if choice < probs.x {
-            let m = visible_sample(wi, dist_alpha(p.roughness, p.anisotropic), u);
+            let m = visible_sample(wi, dist_alpha(p.roughness, p.anisotropic), false, u);
             wo = reflect(wi, m);
             ok = compatible(m, wi, wo, wi.z, true) && wo.z > 0.0;
         } else if choice < probs.x + probs.y {
             let at = thin_transmission_alpha(p);
-            let m = visible_sample(wi, at, u);
+            let m = visible_sample(wi, at, false, u);
             let r = reflect(wi, m);
             wo = Vec3::new(r.x, r.y, -r.z);
             ok = compatible(m, wi, wo, wi.z, false) && wo.z < 0.0;
@@ -619,11 +590,7 @@ pub fn thin_sample(p: Principled, wi0: Vec3, u: Vec2, choice: f32) -> Vec3 {
 }
 
 /// The shading frame Mitsuba evaluates the BSDF of material `m` in at a hit on triangle
-/// `tri` (geometric normal `ng`; `n` the shading normal turned to the viewer, `front`
-/// whether it was already): columns s, t and the normal, where s is dp/du made orthogonal
-/// to the normal (only an anisotropic material needs it; others take any tangent). Under
-/// `twosided` the back side is mirrored to the front, as Mitsuba's `twosided` flips the
-/// local z.
+/// `tri` (`crate::perturb::tangent_frame`); an isotropic one takes any tangent.
 #[kernel_fn]
 #[allow(clippy::too_many_arguments)]
 pub fn frame(
@@ -635,22 +602,16 @@ pub fn frame(
     n: Vec3,
     front: bool,
 ) -> Mat3 {
-    let mut ns = n;
-    if !front {
-        ns = -n;
-    }
-    let mut z = ns;
-    if m.flags & TWO_SIDED != 0 {
-        z = n;
-    }
-    let mut r = crate::sampling::frame(z);
     let anisotropic = textures[(m.table - 1) as usize].y;
-    if anisotropic != 0.0 {
-        let tg = crate::perturb::hit_tangents(tex_coords, tri.original, tri, ng);
-        let s = crate::perturb::shading_tangent(tg.x_axis, ns);
-        r = Mat3::from_cols(s, ns.cross(s), z);
-    }
-    r
+    crate::perturb::tangent_frame(
+        tex_coords,
+        tri,
+        ng,
+        n,
+        front,
+        m.flags & TWO_SIDED != 0,
+        anisotropic != 0.0,
+    )
 }
 
 /// [`eval`] or [`thin_eval`] by material kind.

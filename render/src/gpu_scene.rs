@@ -89,8 +89,11 @@ impl GpuScene {
                 || m.mask.is_some_and(|k| k.texture.is_some())
                 || m.perturb.is_some()
                 || m.blend.is_some_and(|b| b.texture.is_some())
-                // An anisotropic principled BSDF turns with dp/du.
-                || matches!(m.bsdf, cohort_scenes::Bsdf::Principled(p) if p.anisotropic != 0.0)
+                // An anisotropic principled BSDF turns with dp/du; textured parameters are
+                // read at (u, v).
+                || matches!(m.bsdf, cohort_scenes::Bsdf::Principled(p) if p.reads_tex_coords())
+                // The same for a rough conductor's roughness.
+                || matches!(m.bsdf, cohort_scenes::Bsdf::RoughConductor { alpha, .. } if !alpha.is_constant_isotropic())
         });
         let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
             (Some(uvs), true) => uvs

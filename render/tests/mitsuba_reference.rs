@@ -345,6 +345,24 @@ fn rough_conductors_beckmann_and_ggx() {
 }
 
 #[test]
+fn rough_conductors_anisotropic_and_textured_roughness() {
+    check("roughconductor_anisotropic");
+}
+
+/// The anisotropy matters at this budget: each rough conductor made isotropic (the
+/// geometric mean of its constant alphas, its textures dropped) fails the test.
+#[test]
+fn rough_conductors_made_isotropic_fail() {
+    assert_fails("roughconductor_anisotropic", |scene| {
+        for m in &mut scene.materials {
+            if let cohort_scenes::Bsdf::RoughConductor { alpha, .. } = &mut m.bsdf {
+                *alpha = cohort_scenes::Roughness::isotropic((alpha.u * alpha.v).sqrt());
+            }
+        }
+    });
+}
+
+#[test]
 fn checkerboard_textures_on_rectangle_sphere_and_cube() {
     check("checkerboard");
 }
@@ -475,6 +493,23 @@ fn blend_bsdf_with_textured_weights() {
 #[test]
 fn principled_every_reflection_lobe_textured_and_anisotropic() {
     check("principled");
+}
+
+#[test]
+fn principled_parameters_as_textures() {
+    check("principled_textured");
+}
+
+/// The textured parameters matter at this budget: each replaced by its mean fails.
+#[test]
+fn principled_textures_replaced_by_their_means_fail() {
+    assert_fails("principled_textured", |scene| {
+        for m in &mut scene.materials {
+            if let cohort_scenes::Bsdf::Principled(p) = &mut m.bsdf {
+                p.textures = [None; 11];
+            }
+        }
+    });
 }
 
 #[test]

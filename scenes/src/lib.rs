@@ -47,7 +47,9 @@ pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
 pub use environment_map::EnvironmentMap;
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use film_filter::{FilmFilter, FilterKind};
-pub use material::{Bsdf, GpuMaterial, Mask, Material, Perturb, PerturbKind, Principled};
+pub use material::{
+    Bsdf, GpuMaterial, Mask, Material, Perturb, PerturbKind, Principled, Roughness,
+};
 pub use mesh::{MeshAttribute, TriMesh};
 pub use mitsuba::{
     load_mitsuba, load_mitsuba_str, load_mitsuba_str_with, load_mitsuba_with,

@@ -17,10 +17,10 @@ pub enum Bsdf {
         eta: Vec3,
         k: Vec3,
     },
-    /// Microfacet conductor (Mitsuba `roughconductor`), isotropic, GGX or Beckmann, with the
-    /// same Fresnel factor as [`Bsdf::Conductor`].
+    /// Microfacet conductor (Mitsuba `roughconductor`), GGX or Beckmann, isotropic or
+    /// anisotropic, with the same Fresnel factor as [`Bsdf::Conductor`].
     RoughConductor {
-        alpha: f32,
+        alpha: Roughness,
         distribution: Microfacet,
         specular_reflectance: Vec3,
         eta: Vec3,
@@ -73,6 +73,48 @@ pub enum Bsdf {
     Principled(Principled),
 }
 
+/// Microfacet roughness as Mitsuba's `roughconductor` reads it: alpha along the shading
+/// frame's s (dp/du) and t, each a number or the texture (index into
+/// [`crate::Scene::textures`]) whose luminance it is per hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roughness {
+    pub u: f32,
+    pub v: f32,
+    pub u_texture: Option<u32>,
+    pub v_texture: Option<u32>,
+}
+
+impl Roughness {
+    pub fn isotropic(alpha: f32) -> Self {
+        Roughness {
+            u: alpha,
+            v: alpha,
+            u_texture: None,
+            v_texture: None,
+        }
+    }
+
+    /// One number everywhere and in every direction: the kernels read it from
+    /// `GpuMaterial::param` and need no parameter block.
+    pub fn is_constant_isotropic(&self) -> bool {
+        self.u == self.v && self.u_texture.is_none() && self.v_texture.is_none()
+    }
+
+    /// The parameter block the kernels read where it is not
+    /// [`is_constant_isotropic`](Self::is_constant_isotropic)
+    /// (`cohort_kernels::rough_conductor::alpha`): alpha_u, alpha_v and the headers + 1 of
+    /// their textures in `starts` (0: none).
+    pub fn gpu_block(&self, starts: &[u32]) -> [f32; 4] {
+        let header = |t: Option<u32>| f32::from_bits(t.map_or(0, |t| starts[t as usize] + 1));
+        [
+            self.u,
+            self.v,
+            header(self.u_texture),
+            header(self.v_texture),
+        ]
+    }
+}
+
 /// The parameters of a Mitsuba `principled` / `principledthin` BSDF, as Mitsuba reads
 /// them (`eta` already derived from `specular` where that was given).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,20 +137,51 @@ pub struct Principled {
     /// `principledthin`: specular reflectance, specular transmittance, diffuse
     /// transmittance, diffuse reflectance.
     pub sampling_rates: [f32; 4],
+    /// The textures (indices into [`crate::Scene::textures`]) whose luminance replaces a
+    /// number per hit, in [`Principled::TEXTURED`]'s order (Mitsuba reads every one of
+    /// them with `eval_1`).
+    pub textures: [Option<u32>; 11],
 }
 
 impl Principled {
+    /// The parameters that may be textures, in the order of [`Principled::textures`].
+    pub const TEXTURED: [&'static str; 11] = [
+        "roughness",
+        "anisotropic",
+        "metallic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "clearcoat",
+        "clearcoat_gloss",
+        "flatness",
+        "diff_trans",
+    ];
+
     /// The parameter block the kernels read (`cohort_kernels::principled::params`):
-    /// [`Principled::GPU_BLOCK`] entries of the texture array.
-    pub fn gpu_block(&self) -> [[f32; 4]; Principled::GPU_BLOCK] {
+    /// [`Principled::GPU_BLOCK`] entries of the texture array: the numbers, the sampling
+    /// rates, then the headers + 1 of the parameters' textures in `starts` (0: a number).
+    /// A textured anisotropy is marked 1 in the numbers, so that the kernels turn the
+    /// frame with dp/du.
+    pub fn gpu_block(&self, starts: &[u32]) -> [[f32; 4]; Principled::GPU_BLOCK] {
         let r = self.sampling_rates;
+        let anisotropic = if self.textures[1].is_some() {
+            1.0
+        } else {
+            self.anisotropic
+        };
+        let t = |k: usize| {
+            f32::from_bits(
+                self.textures
+                    .get(k)
+                    .copied()
+                    .flatten()
+                    .map_or(0, |t| starts[t as usize] + 1),
+            )
+        };
         [
-            [
-                self.roughness,
-                self.anisotropic,
-                self.metallic,
-                self.spec_trans,
-            ],
+            [self.roughness, anisotropic, self.metallic, self.spec_trans],
             [self.spec_tint, self.sheen, self.sheen_tint, self.clearcoat],
             [
                 self.clearcoat_gloss,
@@ -117,10 +190,19 @@ impl Principled {
                 self.eta,
             ],
             [r[0], r[1], r[2], r[3]],
+            [t(0), t(1), t(2), t(3)],
+            [t(4), t(5), t(6), t(7)],
+            [t(8), t(9), t(10), t(11)],
         ]
     }
 
-    pub const GPU_BLOCK: usize = 4;
+    /// Whether a parameter is a texture (or the frame turns with dp/du): the kernels then
+    /// need the hit's texture coordinates.
+    pub fn reads_tex_coords(&self) -> bool {
+        self.anisotropic != 0.0 || self.textures.iter().any(Option::is_some)
+    }
+
+    pub const GPU_BLOCK: usize = 7;
 }
 
 /// A microfacet normal distribution (Mitsuba's `distribution`).
@@ -243,7 +325,7 @@ impl Material {
     pub fn rough_conductor(alpha: f32, specular_reflectance: Vec3) -> Self {
         Material {
             bsdf: Bsdf::RoughConductor {
-                alpha,
+                alpha: Roughness::isotropic(alpha),
                 distribution: Microfacet::Ggx,
                 specular_reflectance,
                 eta: PERFECT_CONDUCTOR.0,
@@ -316,7 +398,7 @@ impl Material {
                     GpuMaterial::ROUGH_CONDUCTOR,
                     specular_reflectance,
                     eta,
-                    alpha,
+                    alpha.u,
                 )
             }
             Bsdf::Dielectric {
@@ -425,6 +507,14 @@ impl Material {
                 flags |= GpuMaterial::FLAG_PERTURB_PER_SIDE;
             }
         }
+        let reads_uv = match self.bsdf {
+            Bsdf::Principled(p) => p.textures.iter().any(Option::is_some),
+            Bsdf::RoughConductor { alpha, .. } => !alpha.is_constant_isotropic(),
+            _ => false,
+        };
+        if reads_uv {
+            flags |= GpuMaterial::FLAG_READS_UV;
+        }
         GpuMaterial {
             color: color.to_array(),
             kind,
@@ -457,14 +547,14 @@ impl Material {
 /// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
 /// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6, `PRINCIPLED` 7, `PRINCIPLED_THIN` 8 |
 /// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked, bit 5 normal map, bit 6 bump map, bit 7 no shadowing term, bit 8 no flip of invalid normals, bit 9 perturbation per side (`Perturb`) |
+/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked, bit 5 normal map, bit 6 bump map, bit 7 no shadowing term, bit 8 no flip of invalid normals, bit 9 perturbation per side (`Perturb`), bit 10 reads the hit's texture coordinates (textured parameters, anisotropy) |
 /// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
 /// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
 /// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); rough dielectric (alpha, 0, 0); else zero |
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
-/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); else 0 |
+/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); rough conductor with anisotropic or textured roughness: index + 1 of its block (`Roughness::gpu_block`); else 0 |
 /// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
 /// | 80 | `blend_weight: f32` | that probability |
 /// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
@@ -511,6 +601,9 @@ impl GpuMaterial {
     pub const FLAG_NO_SHADOWING: u32 = 128;
     pub const FLAG_NO_FLIP: u32 = 256;
     pub const FLAG_PERTURB_PER_SIDE: u32 = 512;
+    /// The BSDF reads parameters (textures) or turns with dp/du at the hit's texture
+    /// coordinates.
+    pub const FLAG_READS_UV: u32 = 1024;
 }
 
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);

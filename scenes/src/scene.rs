@@ -200,7 +200,7 @@ impl Scene {
     /// [`Scene::gpu_textures`] (`texture` = header index + 1, 0 without a texture).
     pub fn gpu_materials(&self) -> Vec<crate::GpuMaterial> {
         let starts = crate::texture::gpu_texture_starts(&self.textures);
-        let mut principled_at = self.gpu_principled_start();
+        let mut block_at = self.gpu_blocks_start();
         self.materials
             .iter()
             .map(|m| {
@@ -214,15 +214,13 @@ impl Scene {
                 if let Some(p) = m.perturb {
                     g.perturb_texture = starts[p.texture as usize] + 1;
                 }
-                match m.bsdf {
-                    crate::Bsdf::RoughPlastic { table, .. } => {
-                        g.table = starts[table as usize] + 1;
-                    }
-                    crate::Bsdf::Principled(_) => {
-                        g.table = principled_at + 1;
-                        principled_at += crate::Principled::GPU_BLOCK as u32;
-                    }
-                    _ => {}
+                if let crate::Bsdf::RoughPlastic { table, .. } = m.bsdf {
+                    g.table = starts[table as usize] + 1;
+                }
+                let block = Self::gpu_block(m, &starts);
+                if !block.is_empty() {
+                    g.table = block_at + 1;
+                    block_at += block.len() as u32;
                 }
                 if let Some(b) = m.blend {
                     g.blend = b.other + 1;
@@ -237,18 +235,17 @@ impl Scene {
     }
 
     /// Every texture in the kernels' layout (`cohort_scenes::texture::gpu_textures`), then
-    /// the mesh attributes that textures read, the parameter blocks of the principled
-    /// materials (in material order), and the environment map's
+    /// the mesh attributes that textures read, the materials' parameter blocks (in material
+    /// order: [`Scene::gpu_block`]), and the environment map's
     /// (`EnvironmentMap::gpu_layout`), if any.
     pub fn gpu_textures(&self) -> Vec<[f32; 4]> {
         let mut data = crate::texture::gpu_textures(&self.textures, self.triangles.len()).0;
         for name in crate::texture::attributes_read(&self.textures) {
             data.extend(self.gpu_attribute(&name));
         }
+        let starts = crate::texture::gpu_texture_starts(&self.textures);
         for m in &self.materials {
-            if let crate::Bsdf::Principled(p) = m.bsdf {
-                data.extend(p.gpu_block());
-            }
+            data.extend(Self::gpu_block(m, &starts));
         }
         if let Some(map) = &self.environment_map {
             data.extend(map.gpu_layout());
@@ -256,8 +253,22 @@ impl Scene {
         data
     }
 
-    /// Where the principled materials' parameter blocks start in [`Scene::gpu_textures`].
-    fn gpu_principled_start(&self) -> u32 {
+    /// Material `m`'s parameter block in [`Scene::gpu_textures`] (`GpuMaterial::table` =
+    /// its start + 1), if it has one: a principled BSDF's (`Principled::gpu_block`), or a
+    /// rough conductor's roughness where that is not one constant (`Roughness::gpu_block`).
+    /// `starts`: where each texture's header starts.
+    fn gpu_block(m: &crate::Material, starts: &[u32]) -> Vec<[f32; 4]> {
+        match m.bsdf {
+            crate::Bsdf::Principled(p) => p.gpu_block(starts).to_vec(),
+            crate::Bsdf::RoughConductor { alpha, .. } if !alpha.is_constant_isotropic() => {
+                vec![alpha.gpu_block(starts)]
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// Where the materials' parameter blocks start in [`Scene::gpu_textures`].
+    fn gpu_blocks_start(&self) -> u32 {
         let attributes = crate::texture::attributes_read(&self.textures).len();
         crate::texture::gpu_textures_len(&self.textures)
             + (attributes * 3 * self.triangles.len()) as u32
@@ -267,12 +278,13 @@ impl Scene {
     pub fn gpu_environment_map(&self) -> u32 {
         match &self.environment_map {
             Some(_) => {
-                let blocks = self
+                let starts = crate::texture::gpu_texture_starts(&self.textures);
+                let blocks: usize = self
                     .materials
                     .iter()
-                    .filter(|m| matches!(m.bsdf, crate::Bsdf::Principled(_)))
-                    .count();
-                self.gpu_principled_start() + (blocks * crate::Principled::GPU_BLOCK) as u32 + 1
+                    .map(|m| Self::gpu_block(m, &starts).len())
+                    .sum();
+                self.gpu_blocks_start() + blocks as u32 + 1
             }
             None => 0,
         }

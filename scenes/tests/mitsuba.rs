@@ -272,7 +272,7 @@ fn unsupported_features_warn_with_file_and_line() {
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
     </shape>
     <emitter type="sunsky"/>
-    <shape type="rectangle"><bsdf type="roughconductor"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
+    <shape type="rectangle"><bsdf type="roughdielectric"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
     <wibble/>"#,
     );
     let dir = tmp_dir("warnings");
@@ -300,7 +300,7 @@ fn unsupported_features_warn_with_file_and_line() {
     warned_at(r#"type="pplastic""#, "bsdf 'pplastic' is not supported");
     warned_at("roughness", "'roughness'");
     warned_at("sunsky", "emitter 'sunsky' is not supported");
-    warned_at("roughconductor", "anisotropic");
+    warned_at("roughdielectric", "anisotropic");
     warned_at("<wibble/>", "<wibble>");
     // The stand-in for pplastic keeps its colour.
     let s = &loaded.scene;
@@ -629,9 +629,9 @@ fn principled_parameters_defaults_and_errors() {
             "'metallic' must lie in [0, 1]",
         ),
         (
-            r#"<bsdf type="principled"><texture type="bitmap" name="roughness"><string name="filename" value="r.png"/></texture></bsdf>"#,
+            r#"<bsdf type="principled"><texture type="uniform" name="roughness"><float name="value" value="2"/></texture></bsdf>"#,
             "texture",
-            "a texture for 'roughness' is not supported",
+            "'roughness' must lie in [0, 1], not 2",
         ),
         (
             r#"<bsdf type="principledthin"><float name="clearcoat" value="0.5"/></bsdf>"#,

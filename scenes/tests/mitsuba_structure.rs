@@ -920,7 +920,13 @@ fn conductor_materials_and_distributions() {
     else {
         panic!("not a rough conductor")
     };
-    assert_eq!((distribution, alpha), (Microfacet::Beckmann, 0.3));
+    assert_eq!(
+        (distribution, alpha),
+        (
+            Microfacet::Beckmann,
+            cohort_scenes::Roughness::isotropic(0.3)
+        )
+    );
     let Bsdf::RoughConductor { distribution, .. } =
         load(r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/></bsdf>"#)
             .unwrap()
@@ -1034,4 +1040,62 @@ fn blend_bsdfs_become_chained_materials() {
         "{:?}",
         loaded.warnings
     );
+}
+
+/// A rough conductor's roughness as Mitsuba reads it: `alpha_u` and `alpha_v` together
+/// (anisotropic), either as a texture read as a number (a checkerboard's colours swap, as
+/// Mitsuba's `eval_1` reads it); `alpha` with them, or one of them alone, is an error.
+#[test]
+fn rough_conductor_roughness_anisotropic_and_textured() {
+    use cohort_scenes::Roughness;
+    let load = |bsdf: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="path"/><shape type="sphere">{bsdf}</shape></scene>"#
+        );
+        load_mitsuba_str(&xml, ".").map(|l| l.scene)
+    };
+    let alpha = |s: &cohort_scenes::Scene| match s.materials[0].bsdf {
+        Bsdf::RoughConductor { alpha, .. } => alpha,
+        other => panic!("not a rough conductor: {other:?}"),
+    };
+    let s = load(r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.25"/><float name="alpha_v" value="0.05"/></bsdf>"#).unwrap();
+    assert_eq!(
+        alpha(&s),
+        Roughness {
+            u: 0.25,
+            v: 0.05,
+            u_texture: None,
+            v_texture: None
+        }
+    );
+    let s = load(r#"<bsdf type="roughconductor"><texture type="checkerboard" name="alpha_u"><float name="color0" value="0.05"/><float name="color1" value="0.3"/></texture><float name="alpha_v" value="0.1"/></bsdf>"#).unwrap();
+    let a = alpha(&s);
+    assert_eq!((a.v, a.v_texture), (0.1, None));
+    let t = a.u_texture.expect("a textured alpha_u");
+    assert!(
+        matches!(s.textures[t as usize], cohort_scenes::Texture::Checkerboard { color0, .. } if color0 == Vec3::splat(0.3)),
+        "read as a number, the checkerboard's colours swap"
+    );
+    assert!(!a.is_constant_isotropic());
+    assert!(alpha(
+        &load(r#"<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>"#).unwrap()
+    )
+    .is_constant_isotropic());
+    for (bad, needle) in [
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha" value="0.2"/><float name="alpha_u" value="0.2"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            "not both",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.2"/></bsdf>"#,
+            "both 'alpha_u' and 'alpha_v'",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha_u" value="-1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            "alpha_u must be >= 0",
+        ),
+    ] {
+        let e = load(bad).unwrap_err();
+        assert!(e.message.contains(needle), "{bad}: {e}");
+    }
 }

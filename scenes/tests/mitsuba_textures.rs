@@ -573,3 +573,73 @@ fn textured_blend_weights_are_read() {
         "{e}"
     );
 }
+
+/// Mitsuba's `rawconstant`: a float or a vector, as given (Mitsuba's own test scenes use one
+/// as an identity normal map).
+#[test]
+fn rawconstant_textures_are_their_value() {
+    let load = |bsdf: &str| {
+        load_mitsuba_str(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"rectangle\">\n{bsdf}\n</shape>\n</scene>"
+            ),
+            ".",
+        )
+    };
+    let s = load(r#"<bsdf type="normalmap"><texture name="normalmap" type="rawconstant"><vector name="value" value="0.5, 0.5, 1.0"/></texture><bsdf type="diffuse"/></bsdf>"#)
+        .unwrap()
+        .scene;
+    let p = s.materials[0].perturb.expect("a normal map");
+    assert_eq!(
+        s.textures[p.texture as usize].mean(),
+        Vec3::new(0.5, 0.5, 1.0)
+    );
+    let s = load(r#"<bsdf type="diffuse"><texture name="reflectance" type="rawconstant"><float name="value" value="0.25"/></texture></bsdf>"#)
+        .unwrap()
+        .scene;
+    assert!(
+        matches!(s.materials[0].bsdf, cohort_scenes::Bsdf::Diffuse { reflectance } if reflectance == Vec3::splat(0.25))
+    );
+    let e = load(r#"<bsdf type="diffuse"><texture name="reflectance" type="rawconstant"/></bsdf>"#)
+        .unwrap_err();
+    assert!(e.message.contains("needs a 'value'"), "{e}");
+}
+
+/// `principled`'s numbers as textures (Mitsuba reads each with `get_texture` and `eval_1`):
+/// each textured parameter's texture (a checkerboard read as a number: its colours swap),
+/// its mean luminance standing for it; a constant texture is its value; out of range as a
+/// number is still an error.
+#[test]
+fn principled_parameters_as_textures() {
+    let load = |bsdf: &str| {
+        load_mitsuba_str(
+            &format!(
+                "<scene version=\"3.0.0\">\n<shape type=\"sphere\">\n{bsdf}\n</shape>\n</scene>"
+            ),
+            ".",
+        )
+    };
+    let s = load(r#"<bsdf type="principled"><texture type="checkerboard" name="metallic"><float name="color0" value="0.7"/><float name="color1" value="0.1"/></texture><texture type="uniform" name="sheen"><float name="value" value="0.3"/></texture><texture type="checkerboard" name="anisotropic"/></bsdf>"#)
+        .unwrap()
+        .scene;
+    let cohort_scenes::Bsdf::Principled(p) = s.materials[0].bsdf else {
+        panic!("not principled")
+    };
+    let metallic = cohort_scenes::Principled::TEXTURED
+        .iter()
+        .position(|n| *n == "metallic")
+        .unwrap();
+    let t = p.textures[metallic].expect("a textured metallic");
+    assert!(
+        matches!(s.textures[t as usize], Texture::Checkerboard { color0, .. } if color0 == Vec3::splat(0.1))
+    );
+    assert!((p.metallic - 0.4).abs() < 1e-6, "{}", p.metallic);
+    assert!((p.sheen - 0.3).abs() < 1e-6 && p.textures[5].is_none());
+    assert!(p.textures[1].is_some() && p.reads_tex_coords());
+    let block = p.gpu_block(&cohort_scenes::texture::gpu_texture_starts(&s.textures));
+    assert_eq!(block[0][1], 1.0, "a textured anisotropy turns the frame");
+    assert_ne!(block[4][2].to_bits(), 0, "metallic's texture header");
+    let e =
+        load(r#"<bsdf type="principled"><float name="metallic" value="1.5"/></bsdf>"#).unwrap_err();
+    assert!(e.message.contains("must lie in [0, 1]"), "{e}");
+}

@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use crate::error::SceneError;
-use crate::material::{Bsdf, Mask, Microfacet, Perturb, PerturbKind, PERFECT_CONDUCTOR};
+use crate::material::{Bsdf, Mask, Microfacet, Perturb, PerturbKind, Roughness, PERFECT_CONDUCTOR};
 
 use super::conductor_iors::CONDUCTOR_IORS;
 use super::diag::syntax;
@@ -192,6 +192,68 @@ fn alpha(ctx: &mut Ctx, obj: &Obj) -> Result<f32, SceneError> {
     Ok(alpha)
 }
 
+/// Microfacet roughness of a `roughconductor`: isotropic `alpha` (default 0.1) or
+/// `alpha_u` and `alpha_v` together, each a number or a texture read as a number (Mitsuba's
+/// `get_unbounded_texture` and `eval_1`).
+fn roughness<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Roughness, SceneError> {
+    let _ = obj.boolean("sample_visible")?;
+    let mut one = |name: &str, default: f32| -> Result<(f32, Option<u32>), SceneError> {
+        let (value, texture) = match ctx.color_or_texture(obj, name)? {
+            None => (default, None),
+            Some((colour, Some(t))) => (
+                crate::texture::luminance(colour),
+                Some(super::texture::scalar_use(ctx, t)),
+            ),
+            // A number as given; a colour (or constant texture) as its luminance.
+            Some((colour, None)) => (
+                obj.float(name)
+                    .ok()
+                    .flatten()
+                    .unwrap_or(crate::texture::luminance(colour)),
+                None,
+            ),
+        };
+        if texture.is_none() && (value.is_nan() || value < 0.0) {
+            return Err(syntax(obj.loc_of(name), format!("{name} must be >= 0")));
+        }
+        Ok((value, texture))
+    };
+    let r = match (obj.has("alpha_u"), obj.has("alpha_v")) {
+        (true, true) => {
+            if obj.has("alpha") {
+                return Err(syntax(
+                    obj.loc_of("alpha"),
+                    "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+                ));
+            }
+            let (u, u_texture) = one("alpha_u", 0.1)?;
+            let (v, v_texture) = one("alpha_v", 0.1)?;
+            Roughness {
+                u,
+                v,
+                u_texture,
+                v_texture,
+            }
+        }
+        (false, false) => {
+            let (a, texture) = one("alpha", 0.1)?;
+            Roughness {
+                u: a,
+                v: a,
+                u_texture: texture,
+                v_texture: texture,
+            }
+        }
+        _ => {
+            return Err(syntax(
+                &obj.loc,
+                "both 'alpha_u' and 'alpha_v' must be given",
+            ))
+        }
+    };
+    Ok(r)
+}
+
 /// The BSDF of `obj`, parsed once per object (a BSDF referenced by many shapes is reported once).
 pub(crate) fn parse_bsdf<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> {
     let key = obj as *const Obj as usize;
@@ -228,12 +290,12 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         "roughconductor" => {
             let (eta, k) = conductor_ior(ctx, obj)?;
             let distribution = distribution(obj)?;
-            let alpha = alpha(ctx, obj)?;
+            let alpha = roughness(ctx, obj)?;
             let (specular_reflectance, t) = ctx
                 .color_or_texture(obj, "specular_reflectance")?
                 .unwrap_or((Vec3::ONE, None));
             texture = t;
-            if alpha == 0.0 {
+            if alpha.is_constant_isotropic() && alpha.u == 0.0 {
                 ctx.diag.warn(
                     obj.loc_of("alpha"),
                     "roughconductor with alpha 0 rendered as a smooth conductor",

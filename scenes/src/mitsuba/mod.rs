@@ -217,6 +217,11 @@ impl<'a> Ctx<'a> {
                 .float("value")?
                 .map(Vec3::splat)
                 .ok_or_else(|| syntax(&t.loc, "texture 'uniform' needs a 'value'"))?,
+            // Mitsuba's `rawconstant`: the value as given, no colour conversion (an RGB
+            // variant converts none anyway).
+            "rawconstant" => t
+                .float_or_vector("value")?
+                .ok_or_else(|| syntax(&t.loc, "texture 'rawconstant' needs a 'value'"))?,
             "srgb" => {
                 let _ = t.boolean("unbounded")?;
                 t.color("color")?
@@ -227,7 +232,7 @@ impl<'a> Ctx<'a> {
                 let mean = self.textures[i as usize].mean();
                 self.diag.unsupported(
                     &t.loc,
-                    format!("a '{plugin}' texture here (textures vary only diffuse reflectance, plastic diffuse_reflectance and conductor specular_reflectance)"),
+                    format!("a '{plugin}' texture here (this parameter takes one value; textures vary BSDF colours, a rough conductor's roughness, principled parameters, mask opacities and blend weights)"),
                     format!("replaced by its mean colour {mean}"),
                 )?;
                 return Ok(mean);

@@ -541,6 +541,19 @@ impl Obj {
         }
     }
 
+    /// A float (broadcast to three channels) or a vector: what Mitsuba's `rawconstant` takes.
+    pub fn float_or_vector(&self, name: &str) -> Result<Option<Vec3>, SceneError> {
+        let Some(p) = self.prop(name) else {
+            return Ok(None);
+        };
+        match p.value {
+            Value::Float(v) => Ok(Some(Vec3::splat(v as f32))),
+            Value::Integer(v) => Ok(Some(Vec3::splat(v as f32))),
+            Value::Vector(v) => Ok(Some(v)),
+            _ => Err(self.mismatch(p, "a float or a vector")),
+        }
+    }
+
     pub fn vector(&self, name: &str) -> Result<Option<Vec3>, SceneError> {
         let Some(p) = self.prop(name) else {
             return Ok(None);

@@ -37,6 +37,17 @@ fn check_mesh_attributes(
     while let Some(b) = next.take() {
         reads.extend(b.texture.map(|t| (t, false)));
         reads.extend(b.mask.and_then(|m| m.texture).map(|t| (t, true)));
+        if let crate::material::Bsdf::Principled(p) = b.bsdf {
+            reads.extend(p.textures.into_iter().flatten().map(|t| (t, true)));
+        }
+        if let crate::material::Bsdf::RoughConductor { alpha, .. } = b.bsdf {
+            reads.extend(
+                [alpha.u_texture, alpha.v_texture]
+                    .into_iter()
+                    .flatten()
+                    .map(|t| (t, true)),
+            );
+        }
         if let Some((_, weight, part)) = b.blend {
             reads.extend(weight.map(|t| (t, true)));
             depth += 1;

@@ -1,0 +1,52 @@
+//! Mitsuba `roughconductor`'s parameters at a hit: its roughness (alpha_u, alpha_v), each
+//! a number or a texture read as a number, and the frame it is anisotropic in. An
+//! isotropic, untextured one carries its alpha in `Material::param`; any other one has a
+//! parameter block (`Material::table`, laid out by `cohort_scenes::Roughness::gpu_block`):
+//! (alpha_u, alpha_v, header + 1 of alpha_u's texture, header + 1 of alpha_v's; 0: none).
+
+use crate::layout::*;
+use crate::texture::{luminance, texture_at_hit};
+use cohort::prelude::*;
+
+/// (alpha_u, alpha_v) of rough conductor `m` at hit `h` of triangle `original` (texture
+/// coordinates `uv`), at least 1e-4 as Mitsuba clamps them.
+#[kernel_fn]
+pub fn alpha(textures: &[Vec4], m: Material, uv: Vec2, original: u32, h: Vec4) -> Vec2 {
+    let mut a = Vec2::new(m.param, m.param);
+    if m.table != 0 {
+        let b = textures[(m.table - 1) as usize];
+        a = Vec2::new(b.x, b.y);
+        let tu = b.z.to_bits();
+        let tv = b.w.to_bits();
+        if tu != 0 {
+            a.x = luminance(texture_at_hit(textures, tu - 1, uv, original, h));
+        }
+        if tv != 0 {
+            a.y = luminance(texture_at_hit(textures, tv - 1, uv, original, h));
+        }
+    }
+    Vec2::new(a.x.max(1.0e-4), a.y.max(1.0e-4))
+}
+
+/// The frame rough conductor `m` scatters in (`crate::perturb::tangent_frame`): along
+/// dp/du where it has a parameter block (it may be anisotropic there).
+#[kernel_fn]
+#[allow(clippy::too_many_arguments)]
+pub fn frame(
+    m: Material,
+    tex_coords: &[Vec4],
+    tri: Triangle,
+    ng: Vec3,
+    n: Vec3,
+    front: bool,
+) -> Mat3 {
+    crate::perturb::tangent_frame(
+        tex_coords,
+        tri,
+        ng,
+        n,
+        front,
+        m.flags & TWO_SIDED != 0,
+        m.table != 0,
+    )
+}
