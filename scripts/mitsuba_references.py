@@ -941,6 +941,24 @@ SCENES = {
         </bsdf>
     </shape>""",
     ),
+    # An area light with a textured radiance (textures/stripes.png on a rectangle on the
+    # back wall) beside the usual ceiling light: seen directly and through light sampling
+    # on the floor and the cube. (Texture coordinates in [0, 1]: Mitsuba samples such a
+    # light through its texture and the shape's inverse parameterisation, which reaches
+    # only the points whose coordinates lie in [0, 1]^2, so its image of a light with
+    # coordinates beyond is too dark.)
+    "area_texture": scene(
+        "",
+        CEILING
+        + AREA_LIGHT
+        + """<shape type="rectangle">
+        <transform name="to_world"><scale x="0.6" y="0.35"/><translate x="-0.3" y="1.1" z="-0.98"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.2, 0.2"/></bsdf>
+        <emitter type="area">
+            <texture type="bitmap" name="radiance"><string name="filename" value="textures/stripes.png"/></texture>
+        </emitter>
+    </shape>""",
+    ),
     # Principled numbers as textures (read as numbers per hit): a sphere whose roughness,
     # anisotropy, metallic, sheen and clearcoat are checkerboards, and a principledthin cube
     # whose specular and diffuse transmission are a bitmap's luminance and a checkerboard.

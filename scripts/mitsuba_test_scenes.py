@@ -46,7 +46,7 @@ def main():
     ap.add_argument("--cohort", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "cohort"))
     ap.add_argument("--backend", default=None)
     ap.add_argument("names", nargs="*")
-    a = ap.parse_args()
+    a = ap.parse_intermixed_args()
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")

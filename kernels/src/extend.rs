@@ -12,7 +12,7 @@ use crate::integrator::Integrator;
 use crate::layout::*;
 use crate::light::{
     area_to_solid_angle, delta_light_arrival, delta_light_direction, mis_power, pick_light,
-    shared_light_draw, triangle_point,
+    shared_light_draw, triangle_point, triangle_weights,
 };
 use crate::path_end::PathEnd;
 use crate::perturb::{perturb_normal, perturb_weight};
@@ -231,6 +231,25 @@ pub fn shading_normal(
     n
 }
 
+/// The radiance emitter material `m` sends from point `h` (barycentric weights of v1 and
+/// v2 in `h.y`, `h.z`) of triangle `original`: its texture's value there (Mitsuba's
+/// textured `radiance`), else `m.emission`.
+#[kernel_fn]
+pub fn emitted(
+    m: Material,
+    textures: &[Vec4],
+    tex_coords: &[Vec4],
+    original: u32,
+    h: Vec4,
+) -> Vec3 {
+    let mut e = m.emission;
+    if m.emission_texture != 0 {
+        let uv = hit_uv(tex_coords, original, h);
+        e = texture_at_hit(textures, m.emission_texture - 1, uv, original, h);
+    }
+    e
+}
+
 /// Offset along the normal that keeps a new ray off the surface it leaves, scaled with
 /// the hit point's magnitude.
 #[kernel_fn]
@@ -415,7 +434,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             w = mis_power(b4.w, area_to_solid_angle(t.light_pdf, h.x, ng.dot(d)));
                         }
                     }
-                    l += thr * m.emission * w;
+                    l += thr * emitted(m, textures, tex_coords, t.original, h) * w;
                 }
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
                 // The material's colour (diffuse, plastic base, conductor reflectance), or its
@@ -538,7 +557,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     let cos_l = lng.dot(wi);
                                     if cos_l < 0.0 || lm.flags & TWO_SIDED != 0 {
                                         light_pdf = area_to_solid_angle(lt.light_pdf, dist, cos_l);
-                                        le = lm.emission;
+                                        le = emitted(
+                                            lm,
+                                            textures,
+                                            tex_coords,
+                                            lt.original,
+                                            triangle_weights(up),
+                                        );
                                         // Stop short of the light's own surface.
                                         tmax = dist * (1.0 - 1e-4);
                                     }

@@ -109,6 +109,12 @@ pub struct Material {
     /// Mitsuba `blendbsdf` with a textured weight: index + 1 of the header of the texture
     /// whose luminance (clamped to [0, 1]) replaces `blend_weight`; else 0.
     pub blend_texture: u32,
+    /// Area emitter with a textured radiance (Mitsuba's `radiance` texture): index + 1 of
+    /// the header of that texture, whose value at a point is the radiance there; else 0.
+    pub emission_texture: u32,
+    pub pad_a: u32,
+    pub pad_b: u32,
+    pub pad_c: u32,
 }
 
 /// The parameters of a Mitsuba `principled` or `principledthin` BSDF at a hit, named as

@@ -38,6 +38,16 @@ pub fn triangle_point(v0: Vec3, v1: Vec3, v2: Vec3, u: Vec2) -> Vec3 {
     v0 * b0 + v1 * b1 + v2 * (1.0 - b0 - b1)
 }
 
+/// The barycentric weights of v1 and v2 (in y and z, as a hit's) of [`triangle_point`]'s
+/// point for `u`.
+#[kernel_fn]
+pub fn triangle_weights(u: Vec2) -> Vec4 {
+    let su = u.x.sqrt();
+    let b0 = 1.0 - su;
+    let b1 = u.y * su;
+    Vec4::new(0.0, b1, 1.0 - b0 - b1, 0.0)
+}
+
 /// Power-heuristic weight (exponent 2) of a strategy with pdf `a` against one with pdf `b`.
 #[kernel_fn]
 pub fn mis_power(a: f32, b: f32) -> f32 {

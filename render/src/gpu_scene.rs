@@ -86,6 +86,7 @@ impl GpuScene {
         // Texture coordinates only matter where a material reads a texture.
         let textured = scene.materials.iter().any(|m| {
             m.texture.is_some()
+                || m.emission_texture.is_some()
                 || m.mask.is_some_and(|k| k.texture.is_some())
                 || m.perturb.is_some()
                 || m.blend.is_some_and(|b| b.texture.is_some())

@@ -496,6 +496,21 @@ fn principled_every_reflection_lobe_textured_and_anisotropic() {
 }
 
 #[test]
+fn area_light_with_a_textured_radiance() {
+    check("area_texture");
+}
+
+/// The radiance texture matters at this budget: its mean colour in its place fails.
+#[test]
+fn area_light_texture_replaced_by_its_mean_fails() {
+    assert_fails("area_texture", |scene| {
+        for m in &mut scene.materials {
+            m.emission_texture = None;
+        }
+    });
+}
+
+#[test]
 fn principled_parameters_as_textures() {
     check("principled_textured");
 }

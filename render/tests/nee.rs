@@ -167,6 +167,7 @@ fn white_furnace_with_light_sampling() {
         },
         two_sided: true,
         emission: Some(Vec3::splat(le)),
+        emission_texture: None,
         texture: None,
         mask: None,
         blend: None,

@@ -54,6 +54,7 @@ fn white_furnace() {
         },
         two_sided: true,
         emission: Some(Vec3::splat(le)),
+        emission_texture: None,
         texture: None,
         mask: None,
         blend: None,

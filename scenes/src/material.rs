@@ -224,6 +224,9 @@ pub struct Material {
     pub two_sided: bool,
     /// Radiance of a Mitsuba `area` emitter: emitted only on the front (face-normal) side.
     pub emission: Option<Vec3>,
+    /// Index into [`crate::Scene::textures`] of the texture that gives an `area` emitter's
+    /// radiance per point (Mitsuba's textured `radiance`); `emission` is then its mean.
+    pub emission_texture: Option<u32>,
     /// Index into [`crate::Scene::textures`] of the texture that gives the BSDF's colour
     /// (diffuse `reflectance`, plastic `diffuse_reflectance`, conductor
     /// `specular_reflectance`) where it is not a constant.
@@ -295,6 +298,7 @@ impl Material {
             mask: None,
             blend: None,
             perturb: None,
+            emission_texture: None,
         }
     }
 
@@ -318,6 +322,7 @@ impl Material {
             mask: None,
             blend: None,
             perturb: None,
+            emission_texture: None,
         }
     }
 
@@ -337,6 +342,7 @@ impl Material {
             mask: None,
             blend: None,
             perturb: None,
+            emission_texture: None,
         }
     }
 
@@ -354,6 +360,7 @@ impl Material {
             mask: None,
             blend: None,
             perturb: None,
+            emission_texture: None,
         }
     }
 
@@ -532,6 +539,8 @@ impl Material {
             blend: 0,
             blend_weight: 0.0,
             blend_texture: 0,
+            emission_texture: 0,
+            pad: [0; 3],
             // Set by `Scene::gpu_materials`.
             perturb_texture: 0,
             bump_scale,
@@ -560,6 +569,8 @@ impl Material {
 /// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
 /// | 88 | `bump_scale: f32` | bump map: Mitsuba's `scale` |
 /// | 92 | `blend_texture: u32` | `blendbsdf` with a textured weight: index + 1 of its texture's header (its luminance, clamped, replaces `blend_weight`), else 0 |
+/// | 96 | `emission_texture: u32` | index + 1 of the header of the texture that gives an area emitter's radiance per point (`Material::emission_texture`); 0: `emission` everywhere |
+/// | 100 | `pad: [u32; 3]` | |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -579,6 +590,8 @@ pub struct GpuMaterial {
     pub perturb_texture: u32,
     pub bump_scale: f32,
     pub blend_texture: u32,
+    pub emission_texture: u32,
+    pub pad: [u32; 3],
 }
 
 impl GpuMaterial {
@@ -606,4 +619,4 @@ impl GpuMaterial {
     pub const FLAG_READS_UV: u32 = 1024;
 }
 
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 112);

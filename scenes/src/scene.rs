@@ -214,6 +214,9 @@ impl Scene {
                 if let Some(p) = m.perturb {
                     g.perturb_texture = starts[p.texture as usize] + 1;
                 }
+                if let Some(t) = m.emission_texture {
+                    g.emission_texture = starts[t as usize] + 1;
+                }
                 if let crate::Bsdf::RoughPlastic { table, .. } = m.bsdf {
                     g.table = starts[table as usize] + 1;
                 }

@@ -442,7 +442,11 @@ fn vertex_colors_are_read_as_mitsuba_reads_them() {
         &dir,
     )
     .unwrap_err();
-    assert!(e.location.line_number() == Some(3), "{e}");
+    assert!(
+        e.message.contains("no mesh attribute 'vertex_color'")
+            && e.location.line_number() == Some(2),
+        "{e}"
+    );
 }
 
 /// Mitsuba's other mesh attributes: per-face colours (a polygon's for each triangle of its
@@ -642,4 +646,24 @@ fn principled_parameters_as_textures() {
     let e =
         load(r#"<bsdf type="principled"><float name="metallic" value="1.5"/></bsdf>"#).unwrap_err();
     assert!(e.message.contains("must lie in [0, 1]"), "{e}");
+}
+
+/// An `area` emitter's `radiance` as a texture (Mitsuba evaluates it per point): the
+/// material keeps the texture and its mean colour (which weighs the light among the others).
+#[test]
+fn area_emitter_radiance_texture() {
+    let s = load_mitsuba_str(
+        r#"<scene version="3.0.0"><shape type="rectangle"><emitter type="area"><texture type="checkerboard" name="radiance"><rgb name="color0" value="4, 2, 1"/><rgb name="color1" value="0, 0, 0"/></texture></emitter></shape></scene>"#,
+        ".",
+    )
+    .unwrap()
+    .scene;
+    let m = &s.materials[0];
+    let t = m.emission_texture.expect("a textured radiance");
+    assert!(matches!(
+        s.textures[t as usize],
+        Texture::Checkerboard { color0, .. } if color0 == Vec3::new(4.0, 2.0, 1.0)
+    ));
+    assert_eq!(m.emission, Some(Vec3::new(2.0, 1.0, 0.5)));
+    assert_ne!(s.gpu_materials()[0].emission_texture, 0);
 }

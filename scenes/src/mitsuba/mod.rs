@@ -149,6 +149,19 @@ impl<'a> Ctx<'a> {
         obj: &'a Obj,
         name: &str,
     ) -> Result<Option<(Vec3, Option<u32>)>, SceneError> {
+        if let Some((mean, i)) = self.spatial_texture(obj, name)? {
+            return Ok(Some((mean, Some(i))));
+        }
+        Ok(self.color(obj, name)?.map(|c| (c, None)))
+    }
+
+    /// Parameter `name` of `obj` where it is a texture that varies over the surface
+    /// (`checkerboard`, `bitmap`, `mesh_attribute`): its mean colour and its index.
+    pub fn spatial_texture(
+        &mut self,
+        obj: &'a Obj,
+        name: &str,
+    ) -> Result<Option<(Vec3, u32)>, SceneError> {
         if let Some(c) = obj
             .children
             .iter()
@@ -158,10 +171,10 @@ impl<'a> Ctx<'a> {
             if t.tag == "texture" && texture::is_spatial(&t.plugin) {
                 c.take();
                 let i = texture::texture_index(self, t)?;
-                return Ok(Some((self.textures[i as usize].mean(), Some(i))));
+                return Ok(Some((self.textures[i as usize].mean(), i)));
             }
         }
-        Ok(self.color(obj, name)?.map(|c| (c, None)))
+        Ok(None)
     }
 
     /// A colour parameter given as a value, or as a texture (nested or `<ref name=...>`); a

@@ -19,19 +19,21 @@ use super::props::Obj;
 use super::xml::{resolve, show_list};
 use super::Ctx;
 
-/// Mitsuba evaluates a `mesh_attribute` texture on the shape it is hit on: the shape must
-/// have the attribute, and where the texture is read as a number (a mask's opacity, a
-/// blend's weight: `eval_1`), the attribute must be a number (Mitsuba's scalar variants
-/// throw otherwise). Either mistake is an error at the shape.
+/// Mitsuba evaluates a `mesh_attribute` texture (of a BSDF or of the shape's area emitter)
+/// on the shape it is hit on: the shape must have the attribute, and where the texture is
+/// read as a number (a mask's opacity, a blend's weight, a roughness: `eval_1`), the
+/// attribute must be a number (Mitsuba's scalar variants throw otherwise). Either mistake
+/// is an error at the shape.
 fn check_mesh_attributes(
     ctx: &Ctx,
     parsed: &ParsedBsdf,
+    emission_texture: Option<u32>,
     mesh: &TriMesh,
     at: &Location,
     shape: &str,
 ) -> Result<(), SceneError> {
-    // (texture, read as a number) of the BSDF and of each BSDF it blends with.
-    let mut reads = Vec::new();
+    // (texture, read as a number) of the emitter, the BSDF and each BSDF it blends with.
+    let mut reads: Vec<(u32, bool)> = emission_texture.map(|t| (t, false)).into_iter().collect();
     let mut next = Some(*parsed);
     let mut depth = 0;
     while let Some(b) = next.take() {
@@ -289,6 +291,7 @@ fn add_placed<'a>(
 
     let mut bsdf: Option<ParsedBsdf> = None;
     let mut emission: Option<Vec3> = None;
+    let mut emission_texture: Option<u32> = None;
     for c in &obj.children {
         let t = ctx.target(c)?;
         match (t.tag.as_str(), t.plugin.as_str()) {
@@ -322,9 +325,16 @@ fn add_placed<'a>(
                     )?;
                 }
                 ctx.attached.push(key);
-                let radiance = ctx
-                    .color_as(t, "radiance", super::SpectrumUse::Emission)?
-                    .unwrap_or(Vec3::ONE);
+                // Mitsuba's `radiance` may be a texture: its value per point (its mean
+                // weighs the light among the others).
+                let (radiance, texture) = match ctx.spatial_texture(t, "radiance")? {
+                    Some((mean, i)) => (mean, Some(i)),
+                    None => (
+                        ctx.color_as(t, "radiance", super::SpectrumUse::Emission)?
+                            .unwrap_or(Vec3::ONE),
+                        None,
+                    ),
+                };
                 if !radiance.is_finite() || radiance.min_element() < 0.0 {
                     return Err(syntax(
                         t.loc_of("radiance"),
@@ -340,6 +350,7 @@ fn add_placed<'a>(
                     )?;
                 } else {
                     emission = Some(radiance);
+                    emission_texture = texture;
                 }
             }
             ("emitter", other) => {
@@ -380,8 +391,8 @@ fn add_placed<'a>(
         },
         (None, None) => DEFAULT_BSDF,
     };
-    check_mesh_attributes(ctx, &parsed, &mesh, &obj.loc, &name)?;
-    let material = register_material(ctx, builder, parsed, emission);
+    check_mesh_attributes(ctx, &parsed, emission_texture, &mesh, &obj.loc, &name)?;
+    let material = register_material(ctx, builder, parsed, emission, emission_texture);
     let line = obj.loc.line_number().unwrap_or(0);
     let name = obj.id.clone().unwrap_or(format!("{name} (line {line})"));
     let added = builder.add_mesh(&name, &mesh, &to_world, material, shading);
@@ -470,6 +481,7 @@ fn register_material(
     builder: &mut SceneBuilder,
     parsed: ParsedBsdf,
     emission: Option<Vec3>,
+    emission_texture: Option<u32>,
 ) -> u32 {
     let blend = parsed.blend.map(|(weight, texture, part)| {
         let other = ParsedBsdf {
@@ -481,7 +493,7 @@ fn register_material(
         crate::material::Blend {
             weight,
             texture,
-            other: register_material(ctx, builder, other, emission),
+            other: register_material(ctx, builder, other, emission, emission_texture),
         }
     });
     builder.material(Material {
@@ -492,5 +504,6 @@ fn register_material(
         mask: parsed.mask,
         blend,
         perturb: parsed.perturb,
+        emission_texture,
     })
 }
