@@ -47,6 +47,9 @@ def main():
     ap.add_argument("--backend", default=None)
     ap.add_argument("names", nargs="*")
     a = ap.parse_intermixed_args()
+    if not os.path.isfile(a.cohort):
+        sys.exit(f"no cohort binary at {a.cohort}: build it first (cargo build --release -p cohort-cli) "
+                 "or pass --cohort PATH")
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
