@@ -477,7 +477,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             /// The best specialisation of this kernel for `device` at `group` level
             /// (the attribute's level when `None`).
             pub fn spec(device: &::cohort::runtime::Device, group: ::core::option::Option<::cohort::Group>) -> ::cohort::Spec {
-                ::cohort::Spec::for_device(&INFO, device.info(), group.unwrap_or(INFO.group))
+                ::cohort::Spec::for_device(&INFO, &device.info().target(), group.unwrap_or(INFO.group))
             }
 
             /// Runs the kernel with the attribute's group level.

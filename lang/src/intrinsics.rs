@@ -12,14 +12,12 @@
 //! same `use`.
 
 use glam::UVec4;
-use std::sync::atomic::{AtomicI32, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use crate::host::SubgroupArith;
-use crate::ir::{builder::with, GpuType, Place, Val};
+use crate::ir::{intrinsics as lower, GpuType, Place, Val};
 use cohort_runtime::cpu::{self, GroupLevel, Scope};
-use naga::{
-    Barrier, CollectiveOperation as Co, Expression, GatherMode, Statement, SubgroupOperation as So,
-};
+use naga::{CollectiveOperation as Co, SubgroupOperation as So};
 
 /// Waits until every invocation of the workgroup has arrived.
 #[doc(alias = "OpControlBarrier")]
@@ -32,7 +30,7 @@ pub mod workgroup_barrier {
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
     pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
-        super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::WORK_GROUP)));
+        super::lower::workgroup_barrier()
     }
 }
 
@@ -47,7 +45,7 @@ pub mod storage_barrier {
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
     pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
-        super::with(|c| c.stmt(super::Statement::ControlBarrier(super::Barrier::STORAGE)));
+        super::lower::storage_barrier()
     }
 }
 
@@ -62,10 +60,7 @@ pub mod subgroup_barrier {
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
     pub const NEEDS_UNIFORM: bool = true;
     pub fn ir() {
-        super::with(|c| {
-            c.uses_subgroups = true;
-            c.stmt(super::Statement::ControlBarrier(super::Barrier::SUB_GROUP))
-        });
+        super::lower::subgroup_barrier()
     }
 }
 
@@ -88,15 +83,7 @@ pub mod workgroup_uniform_load {
     /// calls of helpers that make it, docs/LANGUAGE.md section 11).
     pub const NEEDS_UNIFORM: bool = true;
     pub fn ir<T: super::GpuType>(p: super::Place<T>) -> super::Val<T> {
-        super::with(|c| {
-            let ty = T::naga_type(&mut c.module);
-            let result = c.expr(super::Expression::WorkGroupUniformLoadResult { ty });
-            c.stmt(super::Statement::WorkGroupUniformLoad {
-                pointer: p.ptr,
-                result,
-            });
-            super::Val::from_handle(result)
-        })
+        super::lower::workgroup_uniform_load(p)
     }
 }
 
@@ -153,35 +140,6 @@ pub mod group_any {
     }
 }
 
-fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
-    with(|c| {
-        c.uses_subgroups = true;
-        let ty = T::naga_type(&mut c.module);
-        let result = c.expr(Expression::SubgroupOperationResult { ty });
-        c.stmt(Statement::SubgroupCollectiveOperation {
-            op,
-            collective_op: collective,
-            argument: x.h,
-            result,
-        });
-        Val::from_handle(result)
-    })
-}
-
-fn subgroup_gather<T: GpuType>(mode: GatherMode, x: Val<T>) -> Val<T> {
-    with(|c| {
-        c.uses_subgroups = true;
-        let ty = T::naga_type(&mut c.module);
-        let result = c.expr(Expression::SubgroupOperationResult { ty });
-        c.stmt(Statement::SubgroupGather {
-            mode,
-            argument: x.h,
-            result,
-        });
-        Val::from_handle(result)
-    })
-}
-
 /// A subgroup collective on the CPU backend: `fold` over the values of the active lanes
 /// that `take(lane, me)` selects, in lane order, from zero. Alone on the host: `alone`.
 #[track_caller]
@@ -218,7 +176,7 @@ macro_rules! collective {
             #[allow(unused_imports)]
             use super::{Co, So};
             pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
-                super::subgroup_op($op, $co, x)
+                super::lower::subgroup_op($op, $co, x)
             }
         }
     };
@@ -278,7 +236,7 @@ pub mod subgroup_any {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
-        super::subgroup_op(super::So::Any, super::Co::Reduce, p)
+        super::lower::subgroup_op(super::So::Any, super::Co::Reduce, p)
     }
 }
 /// Whether `p` holds in every active lane of the subgroup.
@@ -290,7 +248,7 @@ pub mod subgroup_all {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<bool> {
-        super::subgroup_op(super::So::All, super::Co::Reduce, p)
+        super::lower::subgroup_op(super::So::All, super::Co::Reduce, p)
     }
 }
 
@@ -312,15 +270,7 @@ pub mod subgroup_ballot {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir(p: super::Val<bool>) -> super::Val<glam::UVec4> {
-        super::with(|c| {
-            c.uses_subgroups = true;
-            let result = c.expr(super::Expression::SubgroupBallotResult);
-            c.stmt(super::Statement::SubgroupBallot {
-                result,
-                predicate: Some(p.h),
-            });
-            super::Val::from_handle(result)
-        })
+        super::lower::subgroup_ballot(p)
     }
 }
 
@@ -334,7 +284,7 @@ pub mod subgroup_broadcast {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
-        super::subgroup_gather(super::GatherMode::Broadcast(lane.h), x)
+        super::lower::subgroup_broadcast(x, lane)
     }
 }
 /// The value of the first active lane.
@@ -349,7 +299,7 @@ pub mod subgroup_broadcast_first {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>) -> super::Val<T> {
-        super::subgroup_gather(super::GatherMode::BroadcastFirst, x)
+        super::lower::subgroup_broadcast_first(x)
     }
 }
 /// The value of lane `lane` (any value, computed per lane). An inactive or missing lane's
@@ -362,7 +312,7 @@ pub mod subgroup_shuffle {
     #[doc(hidden)]
     pub const NEEDS_UNIFORM: bool = false;
     pub fn ir<T: super::GpuType>(x: super::Val<T>, lane: super::Val<u32>) -> super::Val<T> {
-        super::subgroup_gather(super::GatherMode::Shuffle(lane.h), x)
+        super::lower::subgroup_shuffle(x, lane)
     }
 }
 
@@ -381,93 +331,6 @@ pub mod atomic_compare_exchange {
         current: super::Val<u32>,
         new: super::Val<u32>,
     ) -> super::Val<u32> {
-        super::atomic_cmpxchg(a.ptr, naga::Scalar::U32, current.h, new.h)
+        super::lower::atomic_compare_exchange(a, current, new)
     }
 }
-
-fn atomic_cmpxchg<R>(
-    ptr: naga::Handle<Expression>,
-    scalar: naga::Scalar,
-    cur: naga::Handle<Expression>,
-    new: naga::Handle<Expression>,
-) -> Val<R> {
-    with(|c| {
-        let ty = c.module.generate_predeclared_type(
-            naga::PredeclaredType::AtomicCompareExchangeWeakResult(scalar),
-        );
-        let result = c.expr(Expression::AtomicResult {
-            ty,
-            comparison: true,
-        });
-        c.stmt(Statement::Atomic {
-            pointer: ptr,
-            fun: naga::AtomicFunction::Exchange { compare: Some(cur) },
-            value: new,
-            result: Some(result),
-        });
-        Val::from_handle(c.expr(Expression::AccessIndex {
-            base: result,
-            index: 0,
-        }))
-    })
-}
-
-macro_rules! atomic_place {
-    ($atomic:ty, $int:ty, $scalar:expr) => {
-        impl Place<$atomic> {
-            fn rmw(self, fun: naga::AtomicFunction, v: Val<$int>) -> Val<$int> {
-                with(|c| {
-                    let ty = c.ty(naga::TypeInner::Scalar($scalar));
-                    let result = c.expr(Expression::AtomicResult {
-                        ty,
-                        comparison: false,
-                    });
-                    c.stmt(Statement::Atomic {
-                        pointer: self.ptr,
-                        fun,
-                        value: v.h,
-                        result: Some(result),
-                    });
-                    Val::from_handle(result)
-                })
-            }
-            pub fn fetch_add(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::Add, v)
-            }
-            pub fn fetch_sub(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::Subtract, v)
-            }
-            pub fn fetch_min(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::Min, v)
-            }
-            pub fn fetch_max(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::Max, v)
-            }
-            pub fn fetch_and(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::And, v)
-            }
-            pub fn fetch_or(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::InclusiveOr, v)
-            }
-            pub fn fetch_xor(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::ExclusiveOr, v)
-            }
-            pub fn swap(self, v: Val<$int>, _o: Ordering) -> Val<$int> {
-                self.rmw(naga::AtomicFunction::Exchange { compare: None }, v)
-            }
-            pub fn load(self, _o: Ordering) -> Val<$int> {
-                Val::from_handle(with(|c| c.expr(Expression::Load { pointer: self.ptr })))
-            }
-            pub fn store(self, v: Val<$int>, _o: Ordering) {
-                with(|c| {
-                    c.stmt(Statement::Store {
-                        pointer: self.ptr,
-                        value: v.h,
-                    })
-                })
-            }
-        }
-    };
-}
-atomic_place!(AtomicU32, u32, naga::Scalar::U32);
-atomic_place!(AtomicI32, i32, naga::Scalar::I32);

@@ -11,9 +11,9 @@
 //! the expectation of Mitsuba's and no more variance per sample than Mitsuba has.
 //!
 //! Budget: Mitsuba's own, 2 * 10^6 samples per image (1953 paths per pixel at 32 x 32), on
-//! both backends, also on the software driver: about 8 s per scene and backend on this
-//! project's 2-core CI machine (it was 100 s before the software driver stopped
-//! re-specialising `extend` at every dispatch, `DeviceInfo::uniforms_as_storage`).
+//! the CPU backend (about 13 s per scene on this project's 2-core CI machine) and on real
+//! GPUs. The software Vulkan driver renders a few paths per pixel and must give the CPU
+//! backend's image of those paths ([`SOFTWARE_DRIVER_PATHS`] says why).
 //! `COHORT_MITSUBA_SAMPLES=N` renders N samples per image instead (a smaller N widens the
 //! test's acceptance band by sqrt(2 * 10^6 / N)).
 
@@ -132,7 +132,7 @@ fn z_test(image: &[Vec3], spp: u32, reference: &[Vec3], variance: &[Vec3]) -> Ve
 
 /// Renders scene `name` on every backend and applies the test.
 fn check(name: &str) {
-    let verdicts = verdicts(name, |_| {});
+    let verdicts = verdicts(name, |_| {}, true);
     assert!(!verdicts.is_empty(), "no backend available");
     for (kind, v, mean, reference_mean) in verdicts {
         assert!(
@@ -145,9 +145,89 @@ fn check(name: &str) {
     }
 }
 
-/// Mitsuba's test of scene `name`, changed by `change` after loading, on every backend:
-/// the verdict, the image's mean and the reference's mean.
-fn verdicts(name: &str, change: impl Fn(&mut Scene)) -> Vec<(BackendKind, Verdict, Vec3, Vec3)> {
+/// Paths per pixel on the software Vulkan driver. At Mitsuba's budget a scene took about
+/// 40 s per GPU backend there (2-core CI machine) against 13 s on the CPU backend, and 51
+/// scenes on three backends did not fit CI's 90 minutes; a z-test at a smaller budget is no
+/// answer (at 122 paths per pixel the CLT does not yet hold for a mirror's pixels, and the
+/// `conductor` scene failed). So the software driver renders a few paths per pixel and its
+/// image must be the CPU backend's image of the same paths ([`assert_same_paths`]); the CPU
+/// backend's image at Mitsuba's budget must pass the test. A real GPU renders the full
+/// budget and is tested as the CPU backend is.
+const SOFTWARE_DRIVER_PATHS: u32 = 32;
+
+/// Paths per pixel of the z-tested image on a `w` x `h` image.
+fn paths_per_pixel(w: u32, h: u32) -> u32 {
+    (sample_budget() / (w * h)).max(1)
+}
+
+fn render(device: &Device, scene: &Scene, spp: u32) -> Vec<Vec3> {
+    let opts = RenderOptions {
+        integrator: IntegratorKind::Nee,
+        roulette: Roulette::Mitsuba,
+        budget: Budget::PathsPerPixel(spp),
+        seed: 7,
+        ..Default::default()
+    };
+    let (img, _) = Renderer::new(device, scene, opts)
+        .unwrap()
+        .render(|_, _| {})
+        .unwrap();
+    img.pixels
+}
+
+/// A GPU backend's image and the CPU backend's image of the same paths (same seed and
+/// budget, `spp` paths per pixel) agree. The backends differ only in float rounding (fused
+/// multiply-adds, the last ulp of transcendentals), which may send a path another way
+/// where it grazes an edge or a roulette threshold: the `instances` scene's transformed
+/// meshes make 4 % of its pixel channels differ so. So: the image means agree to 1e-3
+/// relative; at most 10 % of pixel channels differ by more than 1e-3 relative; and no more
+/// than Mitsuba's 0.25 % of pixel channels differ by more than chance allows two
+/// independent renders of the reference's variance (z > 4.42, the test's Sidak threshold
+/// at 32 x 32 pixels). A backend that computes a feature wrongly changes every path that
+/// sees it, and fails.
+fn assert_same_paths(
+    name: &str,
+    kind: BackendKind,
+    image: &[Vec3],
+    cpu: &[Vec3],
+    variance: &[Vec3],
+    spp: u32,
+) {
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * a.abs().max(b.abs()).max(1e-3);
+    let (mut differ, mut disagree) = (0, 0);
+    for ((a, b), v) in image.iter().zip(cpu).zip(variance) {
+        for c in 0..3 {
+            if !close(a[c], b[c]) {
+                differ += 1;
+                let z = (a[c] - b[c]).abs() as f64
+                    / (2.0 * (v[c] as f64).max(1e-4) / spp as f64).sqrt();
+                disagree += usize::from(z > 4.42);
+            }
+        }
+    }
+    let total = 3 * image.len();
+    let mean = |img: &[Vec3]| img.iter().copied().sum::<Vec3>() / img.len() as f32;
+    let (ma, mb) = (mean(image), mean(cpu));
+    eprintln!(
+        "{name} on {kind:?}: {differ} of {total} pixel channels differ from the CPU backend's, {disagree} beyond chance"
+    );
+    assert!(
+        differ * 10 <= total
+            && disagree as f64 <= (1.0 - PASS_SHARE) * total as f64
+            && (0..3).all(|c| close(ma[c], mb[c])),
+        "{name} on {kind:?}: {differ} of {total} pixel channels differ from the CPU backend's image of the same paths, {disagree} beyond chance (mean {ma} vs {mb})"
+    );
+}
+
+/// Mitsuba's test of scene `name`, changed by `change` after loading, on every backend but
+/// the software Vulkan driver: the verdict, the image's mean and the reference's mean. With
+/// `software_too`, the software driver's backends must render the CPU backend's image of
+/// the same paths.
+fn verdicts(
+    name: &str,
+    change: impl Fn(&mut Scene),
+    software_too: bool,
+) -> Vec<(BackendKind, Verdict, Vec3, Vec3)> {
     let xml = scene_dir().join(format!("{name}.xml"));
     let loaded = cohort_scenes::load_mitsuba(&xml).unwrap_or_else(|e| panic!("{e}"));
     let mut scene = loaded.scene;
@@ -156,46 +236,48 @@ fn verdicts(name: &str, change: impl Fn(&mut Scene)) -> Vec<(BackendKind, Verdic
     let variance = read_exr(&scene_dir().join(format!("{name}.var.exr"))).unwrap();
     let (w, h) = (reference.image.width, reference.image.height);
     assert_eq!((scene.camera.width, scene.camera.height), (w, h));
-    let spp = (sample_budget() / (w * h)).max(1);
     let mut out = Vec::new();
+    let cpu = Device::for_tests(BackendKind::Cpu);
     for kind in [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu] {
-        let Some(device) = Device::for_tests(kind) else {
+        let device = match kind {
+            BackendKind::Cpu => cpu.clone(),
+            _ => Device::for_tests(kind),
+        };
+        let Some(device) = device else {
             continue;
         };
-        let opts = RenderOptions {
-            integrator: IntegratorKind::Nee,
-            roulette: Roulette::Mitsuba,
-            budget: Budget::PathsPerPixel(spp),
-            seed: 7,
-            ..Default::default()
-        };
-        let (img, _) = Renderer::new(&device, &scene, opts)
-            .unwrap()
-            .render(|_, _| {})
-            .unwrap();
-        let v = z_test(
-            &img.pixels,
-            spp,
-            &reference.image.pixels,
-            &variance.image.pixels,
-        );
+        if device.info().software_driver {
+            if let (true, Some(cpu)) = (software_too, &cpu) {
+                let image = render(&device, &scene, SOFTWARE_DRIVER_PATHS);
+                let same = render(cpu, &scene, SOFTWARE_DRIVER_PATHS);
+                let variance = &variance.image.pixels;
+                assert_same_paths(name, kind, &image, &same, variance, SOFTWARE_DRIVER_PATHS);
+            }
+            continue;
+        }
+        let spp = paths_per_pixel(w, h);
+        let start = std::time::Instant::now();
+        let image = render(&device, &scene, spp);
+        let seconds = start.elapsed().as_secs_f64();
+        let v = z_test(&image, spp, &reference.image.pixels, &variance.image.pixels);
+        let mean = image.iter().copied().sum::<Vec3>() / image.len() as f32;
         eprintln!(
-            "{name} on {kind:?}: {}/{} pixel channels pass (min p-value {:.3e}, significance {:.3e}); mean {} vs {}",
+            "{name} on {kind:?} ({spp} paths per pixel, {seconds:.1} s): {}/{} pixel channels pass (min p-value {:.3e}, significance {:.3e}); mean {mean} vs {}",
             v.passed,
             v.total,
             v.worst,
             v.alpha,
-            img.mean(),
             reference.image.mean()
         );
-        out.push((kind, v, img.mean(), reference.image.mean()));
+        out.push((kind, v, mean, reference.image.mean()));
     }
     out
 }
 
-/// Scene `name`, changed by `change`, fails Mitsuba's test on every backend.
+/// Scene `name`, changed by `change`, fails Mitsuba's test on every backend that renders
+/// Mitsuba's budget (all but the software driver).
 fn assert_fails(name: &str, change: impl Fn(&mut Scene)) {
-    let verdicts = verdicts(name, change);
+    let verdicts = verdicts(name, change, false);
     assert!(!verdicts.is_empty(), "no backend available");
     for (kind, v, _, _) in verdicts {
         assert!(

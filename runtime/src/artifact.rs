@@ -1,56 +1,57 @@
-//! What a compiled kernel hands to a backend: shader code for each backend plus the
-//! binding layout. Produced by the `cohort` language crate (front end → naga IR → emit),
-//! consumed by `Device::dispatch`. Backends never see naga IR or syn types, only this (the
-//! CPU backend runs `host`, the kernel's Rust function compiled with the program).
+//! What a backend is handed to run: a compiled kernel (the `cohort-compiler` crate's
+//! target-neutral naga module, which each backend lowers itself: `lower`), or code written
+//! for the GPU backends by hand; plus the binding layout, the kernel's needs and, for the
+//! CPU backend, the kernel's own Rust function.
 
-/// How a kernel parameter is bound. Every binding lives in bind group / descriptor set 0,
-/// at the binding index given by `Binding::binding`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum BindingKind {
-    /// `var<storage, read>`
-    StorageRead,
-    /// `var<storage, read_write>` (also used for atomics)
-    StorageReadWrite,
-    /// `var<uniform>`
-    Uniform,
+use std::sync::Arc;
+
+pub use cohort_compiler::abi::{Binding, BindingKind, KernelFeatures};
+pub use cohort_compiler::CompiledKernel;
+
+/// A kernel's code, as its backends receive it.
+#[derive(Clone, Debug)]
+pub enum KernelCode {
+    /// A compiled Cohort kernel: each backend lowers the module (SPIR-V for Vulkan, WGSL
+    /// for wgpu) once per device.
+    Compiled(Arc<CompiledKernel>),
+    /// Shader code written by hand, one text per GPU backend (tests of the runtime, and
+    /// kernels from elsewhere); the CPU backend cannot run it.
+    Shaders {
+        wgsl: String,
+        spirv: Vec<u32>,
+        entry_point: String,
+    },
 }
 
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub struct Binding {
-    pub binding: u32,
-    pub kind: BindingKind,
-    /// Parameter name in the kernel source, for error messages.
-    pub name: String,
-}
-
-/// Device features a kernel needs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct KernelFeatures {
-    /// Uses subgroup operations.
-    pub subgroups: bool,
-    /// Needs the subgroup to be exactly this wide (Vulkan: requiredSubgroupSize).
-    pub required_subgroup_size: Option<u32>,
-    /// Bytes of workgroup memory (`#[workgroup]` arrays) one workgroup uses; a launch
-    /// checks it against the device's limit.
-    pub workgroup_memory_bytes: u64,
-}
-
-/// One compiled kernel specialisation.
+/// One kernel specialisation, ready to dispatch.
 #[derive(Clone, Debug)]
 pub struct KernelArtifact {
     /// Unique name of the specialisation (kernel name plus specialisation suffix); the
-    /// pipeline caches are keyed by it together with a hash of the code.
+    /// pipeline caches are keyed by it together with the code's identity.
     pub name: String,
-    pub entry_point: String,
-    pub wgsl: String,
-    pub spirv: Vec<u32>,
+    pub code: KernelCode,
     pub workgroup_size: [u32; 3],
     pub bindings: Vec<Binding>,
     pub features: KernelFeatures,
     /// The kernel's own Rust function for the native CPU backend (`None` for kernels
-    /// given only as WGSL / SPIR-V, which the CPU backend refuses).
+    /// without one, which the CPU backend refuses).
     pub host: Option<crate::cpu::HostKernel>,
     /// The kernel's `print!`-family calls, indexed by the site number its records carry
     /// (empty for a kernel that does not print: it has no print binding).
     pub prints: Vec<crate::print::PrintSite>,
+}
+
+impl KernelArtifact {
+    /// The artifact of a compiled kernel, with its host form when it has one.
+    pub fn compiled(kernel: Arc<CompiledKernel>, host: Option<crate::cpu::HostKernel>) -> Self {
+        KernelArtifact {
+            name: kernel.name.clone(),
+            workgroup_size: kernel.workgroup_size,
+            bindings: kernel.bindings.clone(),
+            features: kernel.features,
+            prints: kernel.prints.clone(),
+            host,
+            code: KernelCode::Compiled(kernel),
+        }
+    }
 }

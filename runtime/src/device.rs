@@ -52,6 +52,19 @@ pub struct DeviceInfo {
     pub uniforms_as_storage: bool,
 }
 
+impl DeviceInfo {
+    /// What the compiler may assume about this device when it picks a specialisation.
+    pub fn target(&self) -> cohort_compiler::Target {
+        cohort_compiler::Target {
+            subgroup_size: self.subgroup_size,
+            subgroup_size_min: self.subgroup_size_min,
+            subgroup_size_max: self.subgroup_size_max,
+            supports_required_subgroup_size: self.supports_required_subgroup_size,
+            uniforms_as_storage: self.uniforms_as_storage,
+        }
+    }
+}
+
 /// `DeviceInfo::uniforms_as_storage` for a device whose driver would have it `software`:
 /// `COHORT_UNIFORMS_AS_STORAGE=0` or `=1` overrides the choice (for comparisons, and for
 /// drivers this default does not know).

@@ -146,6 +146,14 @@ pub enum RuntimeError {
         detail: String,
     },
 
+    #[error("{location}: kernel `{kernel}`: writing {target} failed: {detail}\n(this is a Cohort compiler bug: the kernel's module was validated, so every target should accept it)")]
+    Lowering {
+        kernel: String,
+        location: String,
+        target: &'static str,
+        detail: String,
+    },
+
     #[error("kernel `{kernel}` failed to compile on the {} backend: {detail}", backend.name())]
     ShaderCompilation {
         kernel: String,

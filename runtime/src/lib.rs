@@ -1,18 +1,20 @@
-//! `cohort-runtime`: runs compiled Cohort kernels on a GPU.
+//! `cohort-runtime`: runs compiled Cohort kernels.
 //!
-//! Data flow: the `cohort` language crate compiles a kernel into a [`KernelArtifact`]
-//! (WGSL + SPIR-V + binding layout + the host function). A [`Device`] (one of three
-//! backends: wgpu consuming the WGSL, raw Vulkan through `ash` consuming the SPIR-V, or the
-//! native CPU backend running the host function on every core) owns [`GpuBuffer`]s and turns
-//! `dispatch(kernel, args, groups)` into a cached pipeline, a bind group / descriptor set
-//! and one queue submission, optionally timed with GPU timestamps ([`DispatchStats`]).
+//! Data flow: the `cohort-compiler` crate compiles a kernel into a target-neutral
+//! [`CompiledKernel`] (a validated naga module, its binding layout and needs); the `cohort`
+//! crate wraps it, with the kernel's Rust function, in a [`KernelArtifact`]. A [`Device`]
+//! (one of three backends: wgpu, which lowers the module to WGSL; raw Vulkan through `ash`,
+//! which lowers it to SPIR-V; or the native CPU backend, which runs the Rust function on
+//! every core) owns [`GpuBuffer`]s and turns `dispatch(kernel, args, groups)` into a
+//! pipeline (lowered and compiled once per device), a bind group / descriptor set and one
+//! queue submission, optionally timed with GPU timestamps ([`DispatchStats`]).
 //!
-//! Module map: `artifact` (what the compiler hands over), `device` (the public facade,
+//! Module map: `artifact` (what a backend is handed), `device` (the public facade,
 //! argument checks, batches), `buffer` (typed buffers and size rules), `wgpu_backend`,
 //! `vulkan_init` (opening a raw Vulkan device) and `vulkan_backend` (buffers, pipelines,
-//! submission on it), `cpu_backend` and `cpu` (the CPU backend and its lanes), `pipeline_cache` (compile once per device),
-//! `timing` (timestamp ticks → nanoseconds), `print` (kernels' print buffers, decoded after
-//! a dispatch), `error`.
+//! submission on it), `cpu_backend` and `cpu` (the CPU backend and its lanes),
+//! `pipeline_cache` (lower and compile once per device), `timing` (timestamp ticks →
+//! nanoseconds), `print` (kernels' print buffers, decoded after a dispatch), `error`.
 
 pub mod artifact;
 mod buffer;
@@ -30,6 +32,13 @@ mod vulkan_init;
 mod wgpu_backend;
 
 pub use artifact::*;
+
+/// Each GPU backend's lowering of a compiled kernel, as its pipelines use it (also for
+/// snapshot tests of the generated code).
+pub mod lower {
+    pub use crate::vulkan_backend::lower as spirv;
+    pub use crate::wgpu_backend::{lower as wgsl, Wgsl};
+}
 pub use buffer::{BufferArg, GpuBuffer};
 pub use device::{
     Batch, Completed, Device, DeviceInfo, Dispatch, DispatchStats, ReadBack, Submission,
@@ -39,9 +48,9 @@ pub use error::{Result, RuntimeError};
 /// Which GPU API a [`Device`] drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BackendKind {
-    /// wgpu (Vulkan backend only), consuming `KernelArtifact::wgsl`.
+    /// wgpu (Vulkan backend only), lowering kernels to WGSL.
     Wgpu,
-    /// Raw Vulkan through `ash`, consuming `KernelArtifact::spirv`.
+    /// Raw Vulkan through `ash`, lowering kernels to SPIR-V.
     Vulkan,
     /// The native CPU backend, running `KernelArtifact::host` on every core.
     Cpu,

@@ -1,18 +1,19 @@
 //! Per-device map from a kernel artifact to its compiled pipeline. Every dispatch looks its
-//! kernel up here first, so compiling (WGSL parse or SPIR-V → driver pipeline) happens once
-//! per device and artifact. The key is the artifact name plus a hash of everything that
-//! shapes the pipeline, so two specialisations that share a name but differ in code never
-//! alias.
+//! kernel up here first, so lowering and compiling (naga module → WGSL or SPIR-V → driver
+//! pipeline) happen once per device and kernel. The key is the artifact name plus a hash
+//! of everything that shapes the pipeline (for a compiled kernel, its compilation's id),
+//! so two specialisations that share a name but differ in code never alias.
 
 use std::collections::hash_map::DefaultHasher;
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
-use crate::{KernelArtifact, Result};
+use crate::{KernelArtifact, KernelCode, Result};
 
-/// Which of the artifact's two codes a backend consumes; only that one goes into the key, so
-/// a change to the other backend's code does not invalidate this backend's pipeline.
+/// Which of a hand-written artifact's two codes a backend consumes; only that one goes into
+/// the key, so a change to the other backend's code does not invalidate this backend's
+/// pipeline.
 #[derive(Clone, Copy)]
 pub(crate) enum Code {
     Wgsl,
@@ -36,13 +37,22 @@ fn fold(h: u64, bytes: &[u8]) -> u64 {
 }
 
 fn code_hash(kernel: &KernelArtifact, code: Code) -> u64 {
-    let h = match code {
-        Code::Wgsl => fold(1, kernel.wgsl.as_bytes()),
-        Code::Spirv => fold(2, bytemuck::cast_slice(&kernel.spirv)),
-    };
     let mut rest = DefaultHasher::new();
-    h.hash(&mut rest);
-    kernel.entry_point.hash(&mut rest);
+    match (&kernel.code, code) {
+        (KernelCode::Compiled(k), _) => (0u8, k.id).hash(&mut rest),
+        (
+            KernelCode::Shaders {
+                wgsl, entry_point, ..
+            },
+            Code::Wgsl,
+        ) => (1u8, fold(1, wgsl.as_bytes()), entry_point).hash(&mut rest),
+        (
+            KernelCode::Shaders {
+                spirv, entry_point, ..
+            },
+            Code::Spirv,
+        ) => (2u8, fold(2, bytemuck::cast_slice(spirv)), entry_point).hash(&mut rest),
+    }
     kernel.bindings.hash(&mut rest);
     kernel.features.hash(&mut rest);
     rest.finish()

@@ -10,51 +10,10 @@
 //! records when the submission is waited for. The CPU backend runs the kernel's own
 //! Rust function, whose `println!` prints directly; its buffer stays empty.
 
-use std::sync::Arc;
-
-/// Name of the binding through which a printing kernel writes its records; the runtime
-/// binds it, launches do not pass it.
-pub const PRINT_BINDING: &str = "__print";
-
-/// Words before the first record: the reservation cursor and the dropped-print count.
-pub const HEADER_WORDS: usize = 2;
+pub use cohort_compiler::abi::{PrintFormat, PrintSite, PrintStream, HEADER_WORDS, PRINT_BINDING};
 
 /// The size of the buffer, unless `COHORT_PRINT_BUFFER_BYTES` says otherwise.
 pub const DEFAULT_BUFFER_BYTES: usize = 4 << 20;
-
-/// Turns a record's argument words into the text the site prints (the kernel's own
-/// format string applied to the host values, so that it reads as the host's `println!`).
-pub type PrintFormat = Arc<dyn Fn(&[u32]) -> String + Send + Sync>;
-
-/// Where a site's text goes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PrintStream {
-    /// `print!`, `println!`
-    Stdout,
-    /// `eprint!`, `eprintln!`
-    Stderr,
-}
-
-/// One `print!`-family call in a kernel (or in a helper it calls).
-#[derive(Clone)]
-pub struct PrintSite {
-    /// Argument words each record of this site carries.
-    pub words: u32,
-    pub stream: PrintStream,
-    pub format: PrintFormat,
-    /// `file:line:column` of the call, for messages about it.
-    pub location: String,
-}
-
-impl std::fmt::Debug for PrintSite {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("PrintSite")
-            .field("words", &self.words)
-            .field("stream", &self.stream)
-            .field("location", &self.location)
-            .finish_non_exhaustive()
-    }
-}
 
 /// Words of the print buffer a dispatch gets: `COHORT_PRINT_BUFFER_BYTES` (at least
 /// enough for the header and one word), else [`DEFAULT_BUFFER_BYTES`].
@@ -129,6 +88,7 @@ pub(crate) fn emit(kernel: &str, printed: &Printed) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Arc;
 
     fn site(words: u32) -> PrintSite {
         PrintSite {

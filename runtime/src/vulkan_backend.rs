@@ -1,4 +1,4 @@
-//! The raw Vulkan backend (through `ash`): consumes `KernelArtifact::spirv`. It exists next
+//! The raw Vulkan backend (through `ash`): lowers compiled kernels to SPIR-V ([`lower`]). It exists next
 //! to wgpu for what wgpu cannot do: pin a pipeline's subgroup size, and run SPIR-V as the
 //! compiler emitted it.
 //!
@@ -10,6 +10,7 @@
 //! is only touched by copy commands from/to host-visible staging buffers, so there is one
 //! upload path on every GPU.
 
+use std::borrow::Cow;
 use std::ffi::CString;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -24,8 +25,8 @@ use crate::error::VkContext;
 use crate::pipeline_cache::{Code, PipelineCache};
 use crate::vulkan_init::{self, lock, Opened, Shared, SubgroupControl};
 use crate::{
-    BackendKind, BindingKind, BufferArg, DeviceInfo, Dispatch, DispatchStats, KernelArtifact,
-    Result, RuntimeError,
+    BackendKind, BindingKind, BufferArg, CompiledKernel, DeviceInfo, Dispatch, DispatchStats,
+    KernelArtifact, KernelCode, Result, RuntimeError,
 };
 
 const BACKEND: BackendKind = BackendKind::Vulkan;
@@ -469,7 +470,13 @@ impl VkDevice {
                 detail,
             }
         };
-        if kernel.spirv.first() != Some(&0x0723_0203) {
+        let (spirv, entry_point) = match &kernel.code {
+            KernelCode::Compiled(k) => (Cow::Owned(lower(k)?), k.entry_point.as_str()),
+            KernelCode::Shaders {
+                spirv, entry_point, ..
+            } => (Cow::Borrowed(spirv.as_slice()), entry_point.as_str()),
+        };
+        if spirv.first() != Some(&0x0723_0203) {
             return Err(fail(
                 "the artifact has no SPIR-V code (missing magic number)".into(),
             ));
@@ -477,11 +484,11 @@ impl VkDevice {
         // Subnormals, NaN, infinities and signed zeros kept as IEEE (and Rust) define them,
         // where the device can: the driver may otherwise flush and fold them.
         let code = crate::float_controls::preserve_f32(
-            &kernel.spirv,
+            &spirv,
             self.info.f32_subnormals,
             self.info.f32_nan_inf,
         );
-        let entry = CString::new(kernel.entry_point.as_str())
+        let entry = CString::new(entry_point)
             .map_err(|_| fail("the entry point name contains a NUL byte".into()))?;
         let required = self.required_subgroup_size(kernel)?;
 
@@ -994,6 +1001,37 @@ unsafe fn barrier(
             &[],
         )
     };
+}
+
+/// SPIR-V 1.3 of a compiled kernel: what this backend hands the driver. A failure is a
+/// compiler bug (the module was validated), reported at the kernel's definition.
+#[doc(alias = "naga::back::spv::write_vec")]
+pub fn lower(kernel: &CompiledKernel) -> Result<Vec<u32>> {
+    let options = naga::back::spv::Options {
+        // Subgroup operations need SPIR-V 1.3; 1.0 would silently declare capabilities
+        // that spirv-val rejects.
+        lang_version: (1, 3),
+        flags: naga::back::spv::WriterFlags::empty(),
+        // Workgroup memory is zeroed by the driver (Vulkan 1.3 / the zero-initialize
+        // extension, which the runtime enables), as WGSL promises, instead of naga's
+        // polyfill: a store of every array by invocation 0 plus a barrier in every
+        // kernel, which made a 16 KiB workgroup array cost seconds on lavapipe.
+        zero_initialize_workgroup_memory:
+            naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Native,
+        ..Default::default()
+    };
+    let pipeline = naga::back::spv::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: kernel.entry_point.clone(),
+    };
+    naga::back::spv::write_vec(&kernel.module, &kernel.info, &options, Some(&pipeline)).map_err(
+        |e| RuntimeError::Lowering {
+            kernel: kernel.name.clone(),
+            location: kernel.location.clone(),
+            target: "SPIR-V",
+            detail: e.to_string(),
+        },
+    )
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! The wgpu backend: consumes `KernelArtifact::wgsl`. One wgpu device on the Vulkan API (the
+//! The wgpu backend: lowers compiled kernels to WGSL ([`lower`]). One wgpu device on the Vulkan API (the
 //! only API this project targets), buffers as plain `wgpu::Buffer`s, one compute pass per
 //! dispatch so that each pass can carry its own timestamp writes.
 //!
@@ -17,8 +17,8 @@ use crate::buffer::{round_up, storage_binding_size, uniform_binding_size, RawBuf
 use crate::device::Limits;
 use crate::pipeline_cache::{Code, PipelineCache};
 use crate::{
-    BackendKind, BindingKind, BufferArg, DeviceInfo, Dispatch, DispatchStats, KernelArtifact,
-    Result, RuntimeError,
+    BackendKind, BindingKind, BufferArg, CompiledKernel, DeviceInfo, Dispatch, DispatchStats,
+    KernelArtifact, KernelCode, Result, RuntimeError,
 };
 
 const BACKEND: BackendKind = BackendKind::Wgpu;
@@ -391,7 +391,17 @@ impl WgpuDevice {
             backend: BACKEND,
             detail,
         };
-        if kernel.wgsl.trim().is_empty() {
+        let lowered;
+        let (wgsl, entry_point) = match &kernel.code {
+            KernelCode::Compiled(k) => {
+                lowered = lower(k)?;
+                (&lowered.code, &lowered.entry_point)
+            }
+            KernelCode::Shaders {
+                wgsl, entry_point, ..
+            } => (wgsl, entry_point),
+        };
+        if wgsl.trim().is_empty() {
             return Err(fail("the artifact has no WGSL code".into()));
         }
         let scope = Scope::push(&self.device);
@@ -399,7 +409,7 @@ impl WgpuDevice {
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(&kernel.name),
-                source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(&kernel.wgsl)),
+                source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(wgsl)),
             });
         let entries: Vec<wgpu::BindGroupLayoutEntry> = kernel
             .bindings
@@ -442,7 +452,7 @@ impl WgpuDevice {
                 label: Some(&kernel.name),
                 layout: Some(&layout),
                 module: &module,
-                entry_point: Some(&kernel.entry_point),
+                entry_point: Some(entry_point),
                 compilation_options: Default::default(),
                 cache: None,
             });
@@ -751,4 +761,43 @@ fn error_text(e: &wgpu::Error) -> String {
         source = s.source();
     }
     text
+}
+
+/// A compiled kernel as WGSL: what this backend hands wgpu.
+#[derive(Clone, Debug)]
+pub struct Wgsl {
+    pub code: String,
+    /// The entry point's name in `code` (naga's namer may change a kernel's name).
+    pub entry_point: String,
+}
+
+/// WGSL of a compiled kernel. A failure is a compiler bug (the module was validated),
+/// reported at the kernel's definition.
+#[doc(alias = "naga::back::wgsl::write_string")]
+pub fn lower(kernel: &CompiledKernel) -> Result<Wgsl> {
+    let code = naga::back::wgsl::write_string(
+        &kernel.module,
+        &kernel.info,
+        naga::back::wgsl::WriterFlags::empty(),
+    )
+    .map_err(|e| RuntimeError::Lowering {
+        kernel: kernel.name.clone(),
+        location: kernel.location.clone(),
+        target: "WGSL",
+        detail: e.to_string(),
+    })?;
+    let entry_point = wgsl_entry_point(&code).unwrap_or_else(|| kernel.entry_point.clone());
+    Ok(Wgsl { code, entry_point })
+}
+
+/// The name of the `@compute` function in `wgsl`.
+fn wgsl_entry_point(wgsl: &str) -> Option<String> {
+    let at = wgsl.find("@compute")?;
+    let rest = &wgsl[at..];
+    let f = rest.find("fn ")? + 3;
+    let name: String = rest[f..]
+        .chars()
+        .take_while(|c| c.is_alphanumeric() || *c == '_')
+        .collect();
+    (!name.is_empty()).then_some(name)
 }

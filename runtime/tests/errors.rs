@@ -4,7 +4,7 @@
 mod common;
 
 use cohort_runtime::{
-    BackendKind, BindingKind, Device, Dispatch, GpuBuffer, KernelFeatures, RuntimeError,
+    BackendKind, BindingKind, Device, Dispatch, GpuBuffer, KernelCode, KernelFeatures, RuntimeError,
 };
 use common::*;
 
@@ -255,9 +255,12 @@ fn write_out_of_range() {
 fn broken_shader_code_is_an_error_not_a_panic() {
     for dev in devices() {
         let mut kernel = affine_kernel("broken", 1, 1);
+        let KernelCode::Shaders { wgsl, spirv, .. } = &mut kernel.code else {
+            unreachable!("a hand-written kernel")
+        };
         match dev.info().backend {
-            BackendKind::Wgpu => kernel.wgsl = "@compute @workgroup_size(64) fn main( {".into(),
-            BackendKind::Vulkan => kernel.spirv = vec![],
+            BackendKind::Wgpu => *wgsl = "@compute @workgroup_size(64) fn main( {".into(),
+            BackendKind::Vulkan => spirv.clear(),
             BackendKind::Cpu => unreachable!("these tests run the GPU backends"),
         }
         let buf: GpuBuffer<u32> = dev.alloc(64).unwrap();
@@ -273,7 +276,9 @@ fn broken_shader_code_is_an_error_not_a_panic() {
         // A well-typed WGSL that fails validation (writing a read-only buffer).
         if dev.info().backend == BackendKind::Wgpu {
             let mut k = affine_kernel("bad_access", 1, 1);
-            k.wgsl = k.wgsl.replace("read_write", "read");
+            if let KernelCode::Shaders { wgsl, .. } = &mut k.code {
+                *wgsl = wgsl.replace("read_write", "read");
+            }
             let err = dev
                 .dispatch(&k, &[buf.arg()], Dispatch::Groups([1, 1, 1]))
                 .unwrap_err();

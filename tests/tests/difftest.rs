@@ -207,12 +207,9 @@ fn generic_over_trait() {
     let sq = run::<Square>(&xs);
     let tent = run::<Tent>(&xs);
     assert_ne!(sq, tent, "two strategies must give two kernels");
-    let a =
-        apply_curve::artifact::<Square>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread))
-            .unwrap();
-    let b =
-        apply_curve::artifact::<Tent>(&cohort::Spec::portable(&apply_curve::INFO, Group::Thread))
-            .unwrap();
+    let spec = cohort::Spec::portable(&apply_curve::INFO, Group::Thread);
+    let a = cohort::emit::emit(&apply_curve::build::<Square>(&spec)).unwrap();
+    let b = cohort::emit::emit(&apply_curve::build::<Tent>(&spec)).unwrap();
     assert_ne!(a.wgsl, b.wgsl);
 }
 

@@ -2,7 +2,9 @@
 //! would (WGSL for wgpu, SPIR-V through naga for Vulkan) and open every available backend.
 #![allow(dead_code)]
 
-use cohort_runtime::{BackendKind, Binding, BindingKind, Device, KernelArtifact, KernelFeatures};
+use cohort_runtime::{
+    BackendKind, Binding, BindingKind, Device, KernelArtifact, KernelCode, KernelFeatures,
+};
 
 pub const BACKENDS: [BackendKind; 2] = [BackendKind::Vulkan, BackendKind::Wgpu];
 
@@ -57,9 +59,11 @@ pub fn artifact(
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     KernelArtifact {
         name: name.to_string(),
-        entry_point: "main".to_string(),
-        wgsl: wgsl.to_string(),
-        spirv,
+        code: KernelCode::Shaders {
+            wgsl: wgsl.to_string(),
+            spirv,
+            entry_point: "main".to_string(),
+        },
         workgroup_size,
         bindings,
         features,

@@ -3,7 +3,22 @@
 //! workgroup size, how a warp is realised on this device). A `(kernel, Spec)` pair is
 //! the cache key of a compiled artifact.
 
-use cohort_runtime::DeviceInfo;
+/// What a specialisation may assume about the device it will run on: its subgroups and
+/// how it prefers uniform parameters. The runtime describes each device this way
+/// (`DeviceInfo::target`); the compiler knows no device API.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Target {
+    /// The subgroup width a kernel gets when it does not require one.
+    pub subgroup_size: u32,
+    pub subgroup_size_min: u32,
+    pub subgroup_size_max: u32,
+    /// Whether a kernel may require a subgroup width in `[min, max]` (Vulkan subgroup size
+    /// control).
+    pub supports_required_subgroup_size: bool,
+    /// Whether uniform parameters should be read-only storage buffers
+    /// ([`Spec::uniforms_as_storage`]).
+    pub uniforms_as_storage: bool,
+}
 
 /// The coherence group level: which invocations share a `group_share` value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -71,7 +86,7 @@ pub struct Spec {
     pub required_subgroup_size: Option<u32>,
     /// Declare uniform parameters (`&T`) as read-only storage buffers: the same values and
     /// layout, bound as storage. For drivers where a uniform buffer costs more than its
-    /// reads ([`DeviceInfo::uniforms_as_storage`]).
+    /// reads ([`Target::uniforms_as_storage`]).
     pub uniforms_as_storage: bool,
 }
 
@@ -95,7 +110,7 @@ impl Spec {
 
     /// The best specialisation for `device`: warps use subgroup broadcasts where the
     /// device's subgroups are (or can be made) exactly 32 wide.
-    pub fn for_device(info: &KernelInfo, device: &DeviceInfo, group: Group) -> Spec {
+    pub fn for_device(info: &KernelInfo, device: &Target, group: Group) -> Spec {
         let mut spec = Spec::portable(info, group);
         spec.uniforms_as_storage = device.uniforms_as_storage;
         if group == Group::Warp {

@@ -70,14 +70,14 @@ pub(crate) struct Ctx {
     pub info: &'static KernelInfo,
     pub uses_subgroups: bool,
     pub next_binding: u32,
-    pub bindings: Vec<cohort_runtime::Binding>,
+    pub bindings: Vec<crate::abi::Binding>,
     /// Storage buffers declared so far, and the lengths binding once `len()` is used.
     pub storage_buffers: u32,
     pub lengths: Option<Handle<naga::GlobalVariable>>,
     pub group_share_sites: u32,
     /// The print binding once the kernel prints, and its print sites in site order.
     pub print: Option<Handle<naga::GlobalVariable>>,
-    pub prints: Vec<cohort_runtime::print::PrintSite>,
+    pub prints: Vec<crate::abi::PrintSite>,
     /// What the kernel asks for that this specialisation cannot lower (e.g. `group_any`
     /// at grid level): reported by `emit` as a compile error at the kernel's span.
     pub unsupported: Vec<String>,

@@ -142,7 +142,11 @@ pub fn group_any(p: Val<bool>) -> Val<bool> {
             });
             p
         }
-        Group::Warp if spec.warp_via_subgroup => crate::intrinsics::subgroup_any::ir(p),
+        Group::Warp if spec.warp_via_subgroup => super::intrinsics::subgroup_op(
+            naga::SubgroupOperation::Any,
+            naga::CollectiveOperation::Reduce,
+            p,
+        ),
         Group::Warp | Group::Block(_) => {
             // One flag per group in workgroup memory (zero-initialised at launch): set by
             // the invocations where `p` holds, read by all, cleared by the group's leader

@@ -3,7 +3,7 @@
 //! `#[kernel]` rewrites a print into [`record`]: the arguments' values as `u32` words, a
 //! site number, and a closure that formats the words back into host values with the
 //! kernel's own format string. The kernel appends the record to the print buffer
-//! (`cohort_runtime::print` describes its layout); the runtime decodes it after the
+//! (`crate::abi` describes its layout); the runtime decodes it after the
 //! dispatch. The format string is applied on the host by `format!`, so a kernel prints
 //! exactly what the same `println!` prints when the function runs on the host.
 
@@ -17,10 +17,9 @@ use super::kernel::add_global;
 use super::ops::{ge, le};
 use super::types::GpuType;
 use super::val::{lit, place_index, Place, RtArray, Val};
-use cohort_runtime::print::{PrintFormat, PrintSite, HEADER_WORDS};
-use cohort_runtime::BindingKind;
+use crate::abi::{BindingKind, PrintFormat, PrintSite, HEADER_WORDS};
 
-pub use cohort_runtime::print::{PrintStream, PRINT_BINDING};
+pub use crate::abi::{PrintStream, PRINT_BINDING};
 
 /// A value a kernel can print: `f32`, `u32`, `i32`, `usize`, `bool` and glam's vectors of
 /// them, formatted as on the host.

@@ -1,11 +1,13 @@
 //! The IR builder: typed handles over naga IR that the rewritten kernel code calls.
-//! Front end (`cohort-macros`) → here → `naga::Module` → `emit` (WGSL, SPIR-V).
+//! Front end (`cohort-macros`) → here → `naga::Module` → [`crate::compile`] (validated,
+//! compacted, target-neutral) → a backend of `cohort-runtime`, which lowers it.
 
 pub(crate) mod builder;
 pub mod control;
 mod fold;
 pub mod function;
 pub mod group;
+pub mod intrinsics;
 pub mod kernel;
 pub mod math;
 pub mod ops;

@@ -15,8 +15,8 @@ use std::marker::PhantomData;
 use super::builder::{self, with, Ctx, FnState, InstallGuard};
 use super::types::GpuType;
 use super::val::{AsPlace, Place, RtArray, Val};
+use crate::abi::{Binding as RtBinding, BindingKind};
 use crate::spec::{Group, KernelInfo, Spec};
-use cohort_runtime::{Binding as RtBinding, BindingKind};
 
 /// The result of building a kernel, before validation and emission.
 pub struct BuiltKernel {
@@ -25,8 +25,8 @@ pub struct BuiltKernel {
     pub uses_subgroups: bool,
     /// Operations this specialisation cannot lower; `emit` turns them into an error.
     pub unsupported: Vec<String>,
-    /// The kernel's print sites (`cohort_runtime::print`), in site order.
-    pub prints: Vec<cohort_runtime::print::PrintSite>,
+    /// The kernel's print sites (`crate::abi::PrintSite`), in site order.
+    pub prints: Vec<crate::abi::PrintSite>,
     pub spec: Spec,
     pub info: &'static KernelInfo,
 }
