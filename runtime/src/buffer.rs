@@ -1,5 +1,6 @@
 //! Typed device buffers as the user sees them, and the type-erased `BufferArg` that kernel
-//! calls pass to `Device::dispatch`. A `GpuBuffer<T>` wraps a backend buffer (`RawBuffer`);
+//! calls pass to `Device::dispatch`. A `GpuBuffer<T>` wraps a backend buffer (`RawBuffer`,
+//! type-erased: `backend.rs`);
 //! the backends read the raw handle back out of a `BufferArg` when they bind it.
 //!
 //! There is one buffer type for every use (storage, uniform, indirect, copies), so the size
@@ -7,9 +8,8 @@
 //! `storage_binding_size` / `uniform_binding_size` for what a descriptor covers.
 
 use std::marker::PhantomData;
-use std::sync::Arc;
 
-use crate::{cpu_backend, vulkan_backend, wgpu_backend};
+pub(crate) use crate::backend::RawBuffer;
 
 /// The smallest allocation: zero-length buffers still need a real handle to bind, and 16 is
 /// the uniform-buffer granule, so every allocation can be bound as either kind.
@@ -37,30 +37,6 @@ pub(crate) fn storage_binding_size(bytes: u64) -> u64 {
 /// Bytes covered by a uniform binding: uniform blocks are sized in 16-byte granules.
 pub(crate) fn uniform_binding_size(bytes: u64) -> u64 {
     alloc_size(bytes)
-}
-
-/// Backend handle of one allocation. Cloning shares the allocation: a recorded batch holds
-/// clones so a buffer dropped before `Batch::submit` stays alive until the GPU is done.
-#[derive(Clone)]
-pub(crate) enum RawBuffer {
-    Wgpu(wgpu_backend::Buffer),
-    Vulkan(Arc<vulkan_backend::Buffer>),
-    Cpu(Arc<cpu_backend::CpuBuffer>),
-}
-
-impl RawBuffer {
-    /// Whether both handles name the same allocation.
-    pub(crate) fn same(&self, other: &RawBuffer) -> bool {
-        match (self, other) {
-            // wgpu ids are only unique within one instance, and each device has its own.
-            (RawBuffer::Wgpu(a), RawBuffer::Wgpu(b)) => {
-                a.device_id == b.device_id && a.buffer == b.buffer
-            }
-            (RawBuffer::Vulkan(a), RawBuffer::Vulkan(b)) => Arc::ptr_eq(a, b),
-            (RawBuffer::Cpu(a), RawBuffer::Cpu(b)) => Arc::ptr_eq(a, b),
-            _ => false,
-        }
-    }
 }
 
 /// A typed buffer in device memory, `len` elements of `T`. Dropping it frees the memory

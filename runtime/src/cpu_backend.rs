@@ -10,6 +10,9 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::backend::{
+    resolve, Arg, Backend, Finished, Groups, InFlight, Recorded, Recording, Records,
+};
 use crate::buffer::RawBuffer;
 use crate::cpu::{self, HostBuf, HostKernel};
 use crate::device::{DeviceInfo, Dispatch, DispatchStats, Limits};
@@ -60,14 +63,9 @@ pub(crate) struct Cmd {
     name: String,
     host: HostKernel,
     workgroup_size: u32,
-    /// The kept buffers (alive until the dispatch ran) and the bytes each binding covers.
-    args: Vec<(Arc<CpuBuffer>, usize)>,
-    groups: Groups,
-}
-
-enum Groups {
-    Direct([u32; 3]),
-    Indirect(Arc<CpuBuffer>, usize),
+    /// The kept buffers (alive until the dispatch ran) and their logical sizes.
+    args: Vec<Arg<Arc<CpuBuffer>>>,
+    groups: Groups<Arc<CpuBuffer>>,
 }
 
 pub(crate) struct CpuDevice {
@@ -120,78 +118,9 @@ impl CpuDevice {
         })
     }
 
-    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
-        Ok(RawBuffer::Cpu(Arc::new(CpuBuffer::new(bytes, init)?)))
-    }
-
     fn own(&self, raw: &RawBuffer, op: &'static str) -> Result<Arc<CpuBuffer>> {
-        match raw {
-            RawBuffer::Cpu(b) => Ok(b.clone()),
-            _ => Err(RuntimeError::BufferNotOnDevice { op }),
-        }
-    }
-
-    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
-        let b = self.own(raw, "write")?;
-        assert!(offset as usize + bytes.len() <= b.bytes());
-        // SAFETY: in range (checked by the caller against the logical length); no dispatch
-        // runs while the host writes (submissions complete before they return).
-        unsafe {
-            std::ptr::copy_nonoverlapping(bytes.as_ptr(), b.ptr().add(offset as usize), bytes.len())
-        };
-        Ok(())
-    }
-
-    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
-        read_prefix(&*self.own(raw, "read")?, dst);
-        Ok(())
-    }
-
-    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<Arc<CpuBuffer>> {
-        self.own(raw, "read_back")
-    }
-
-    pub(crate) fn record(
-        &self,
-        kernel: &KernelArtifact,
-        args: &[BufferArg<'_>],
-        dispatch: &Dispatch<'_>,
-    ) -> Result<Cmd> {
-        let host = kernel.host.ok_or_else(|| RuntimeError::MissingFeature {
-            kernel: kernel.name.clone(),
-            backend: BackendKind::Cpu,
-            feature: "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
-        })?;
-        let args = kernel
-            .bindings
-            .iter()
-            .zip(args)
-            .map(|(b, a)| {
-                let buf = match a.raw {
-                    RawBuffer::Cpu(buf) => buf.clone(),
-                    _ => {
-                        return Err(RuntimeError::ForeignBuffer {
-                            kernel: kernel.name.clone(),
-                            param: b.name.clone(),
-                        })
-                    }
-                };
-                Ok((buf, a.size_bytes as usize))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let groups = match dispatch {
-            Dispatch::Groups(g) => Groups::Direct(*g),
-            Dispatch::Indirect { args, offset_elems } => {
-                Groups::Indirect(self.own(&args.raw, "indirect dispatch")?, *offset_elems)
-            }
-        };
-        Ok(Cmd {
-            name: kernel.name.clone(),
-            host,
-            workgroup_size: kernel.workgroup_size[0],
-            args,
-            groups,
-        })
+        raw.get::<CpuBuffer>()
+            .ok_or(RuntimeError::BufferNotOnDevice { op })
     }
 
     /// Runs the dispatches in order, then copies the read-backs.
@@ -245,7 +174,7 @@ fn run(cmd: &Cmd) -> Result<()> {
         Groups::Direct(g) => *g,
         Groups::Indirect(b, at) => {
             let mut words = [0u8; 12];
-            let start = at * 4;
+            let start = *at as usize;
             // SAFETY: `check_call` checked that three words follow `at`.
             unsafe { std::ptr::copy_nonoverlapping(b.ptr().add(start), words.as_mut_ptr(), 12) };
             let w = |i: usize| u32::from_le_bytes(words[i * 4..i * 4 + 4].try_into().unwrap());
@@ -259,9 +188,9 @@ fn run(cmd: &Cmd) -> Result<()> {
     let bufs: Vec<HostBuf> = cmd
         .args
         .iter()
-        .map(|(b, bytes)| HostBuf {
-            ptr: b.ptr(),
-            bytes: *bytes,
+        .map(|arg| HostBuf {
+            ptr: arg.buffer.ptr(),
+            bytes: arg.size_bytes as usize,
         })
         .collect();
     let launch = cpu::Launch::new(&cmd.host, &bufs, cmd.workgroup_size, groups);
@@ -282,4 +211,89 @@ fn run(cmd: &Cmd) -> Result<()> {
             detail: format!("an invocation panicked: {message}"),
         }
     })
+}
+
+impl Backend for CpuDevice {
+    fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        Ok(RawBuffer::new(CpuBuffer::new(bytes, init)?))
+    }
+
+    fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let b = self.own(raw, "write")?;
+        assert!(offset as usize + bytes.len() <= b.bytes());
+        // SAFETY: in range (checked by the caller against the logical length); no dispatch
+        // runs while the host writes (submissions complete before they return).
+        unsafe {
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), b.ptr().add(offset as usize), bytes.len())
+        };
+        Ok(())
+    }
+
+    fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        read_prefix(&*self.own(raw, "read")?, dst);
+        Ok(())
+    }
+
+    /// Nothing to build: the kernel's host function is part of the program.
+    fn prepare(&self, _kernel: &KernelArtifact) -> Result<()> {
+        Ok(())
+    }
+
+    /// The lanes' `println!` prints directly, so the print buffer stays empty.
+    fn print_buffer_words(&self) -> usize {
+        crate::print::HEADER_WORDS + 1
+    }
+
+    fn begin(&self) -> Box<dyn Recording<'_> + '_> {
+        Recorded::start(self)
+    }
+}
+
+impl Records for CpuDevice {
+    type Cmd = Cmd;
+    type ReadBuffer = Arc<CpuBuffer>;
+
+    fn record_cmd(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        let host = kernel.host.ok_or_else(|| RuntimeError::MissingFeature {
+            kernel: kernel.name.clone(),
+            backend: BackendKind::Cpu,
+            feature: "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
+        })?;
+        // Host memory is one: a buffer of any CPU device binds on every CPU device.
+        let (args, groups) = resolve(kernel, args, dispatch, |raw| raw.get::<CpuBuffer>())?;
+        Ok(Cmd {
+            name: kernel.name.clone(),
+            host,
+            workgroup_size: kernel.workgroup_size[0],
+            args,
+            groups,
+        })
+    }
+
+    fn read_buffer(&self, raw: &RawBuffer) -> Result<Arc<CpuBuffer>> {
+        self.own(raw, "read_back")
+    }
+
+    /// Runs the batch at once: a CPU has nothing to overlap it with.
+    fn submit_cmds<'d>(
+        &'d self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(Arc<CpuBuffer>, u64)>,
+    ) -> Result<Box<dyn InFlight + 'd>> {
+        let (stats, reads) = self.submit(cmds, reads)?;
+        Ok(Box::new(Finished(stats, reads)))
+    }
 }

@@ -1,13 +1,15 @@
 //! The public face of the runtime: `Device`, its buffers and dispatches, and `Batch`.
 //!
 //! A call goes: `Device::dispatch` / `Batch::dispatch` → `check_call` (argument count,
-//! binding sizes, workgroup counts; backend independent, so both backends reject the same
+//! binding sizes, workgroup counts; backend independent, so every backend rejects the same
 //! mistakes with the same messages) → the backend's `record` (cached pipeline + resolved
 //! buffer handles, no GPU work yet) → the backend's `submit` (one command buffer, one
-//! queue submission, wait, timestamps). `Device::dispatch` is a batch of one.
+//! queue submission, wait, timestamps). `Device::dispatch` is a batch of one. The backend
+//! is one `Arc<dyn Backend>` (`backend.rs`).
 
 use std::sync::Arc;
 
+use crate::backend::{Backend, InFlight, Recording};
 use crate::buffer::{alloc_size, storage_binding_size, uniform_binding_size};
 use crate::print::{self, PrintSite};
 use crate::{
@@ -108,17 +110,10 @@ pub struct DispatchStats {
     pub gpu_time_ns: Option<u64>,
 }
 
-#[derive(Clone)]
-enum Inner {
-    Wgpu(Arc<wgpu_backend::WgpuDevice>),
-    Vulkan(Arc<vulkan_backend::VkDevice>),
-    Cpu(Arc<cpu_backend::CpuDevice>),
-}
-
 /// A GPU device on one backend. Cloning is cheap and shares the device.
 #[derive(Clone)]
 pub struct Device {
-    inner: Inner,
+    backend: Arc<dyn Backend>,
 }
 
 impl std::fmt::Debug for Device {
@@ -164,12 +159,12 @@ impl Device {
     }
 
     fn open(kind: BackendKind, which: Option<usize>) -> Result<Device> {
-        let inner = match kind {
-            BackendKind::Wgpu => Inner::Wgpu(Arc::new(wgpu_backend::WgpuDevice::new(which)?)),
-            BackendKind::Vulkan => Inner::Vulkan(Arc::new(vulkan_backend::VkDevice::new(which)?)),
-            BackendKind::Cpu => Inner::Cpu(Arc::new(cpu_backend::CpuDevice::new(which)?)),
+        let backend: Arc<dyn Backend> = match kind {
+            BackendKind::Wgpu => Arc::new(wgpu_backend::WgpuDevice::new(which)?),
+            BackendKind::Vulkan => Arc::new(vulkan_backend::VkDevice::new(which)?),
+            BackendKind::Cpu => Arc::new(cpu_backend::CpuDevice::new(which)?),
         };
-        Ok(Device { inner })
+        Ok(Device { backend })
     }
 
     /// A real GPU if there is one: raw Vulkan first (required subgroup sizes, no WGSL
@@ -231,32 +226,20 @@ impl Device {
     }
 
     pub fn info(&self) -> &DeviceInfo {
-        match &self.inner {
-            Inner::Wgpu(d) => &d.info,
-            Inner::Vulkan(d) => &d.info,
-            Inner::Cpu(d) => &d.info,
-        }
+        self.backend.info()
     }
 
     /// A zero-filled buffer of `len` elements.
     pub fn alloc<T: bytemuck::Pod>(&self, len: usize) -> Result<GpuBuffer<T>> {
         let bytes = alloc_size(elem_bytes::<T>(len));
-        let raw = match &self.inner {
-            Inner::Wgpu(d) => d.create_buffer(bytes, &[])?,
-            Inner::Vulkan(d) => d.create_buffer(bytes, &[])?,
-            Inner::Cpu(d) => d.create_buffer(bytes, &[])?,
-        };
+        let raw = self.backend.create_buffer(bytes, &[])?;
         Ok(GpuBuffer::new(raw, len))
     }
 
     pub fn upload<T: bytemuck::Pod>(&self, data: &[T]) -> Result<GpuBuffer<T>> {
         let init: &[u8] = bytemuck::cast_slice(data);
         let bytes = alloc_size(init.len() as u64);
-        let raw = match &self.inner {
-            Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
-            Inner::Vulkan(d) => d.create_buffer(bytes, init)?,
-            Inner::Cpu(d) => d.create_buffer(bytes, init)?,
-        };
+        let raw = self.backend.create_buffer(bytes, init)?;
         Ok(GpuBuffer::new(raw, data.len()))
     }
 
@@ -266,11 +249,7 @@ impl Device {
     pub fn upload_uniform<T: bytemuck::Pod>(&self, value: &T) -> Result<GpuBuffer<T>> {
         let init: &[u8] = bytemuck::bytes_of(value);
         let bytes = alloc_size(init.len() as u64);
-        let raw = match &self.inner {
-            Inner::Wgpu(d) => d.create_buffer(bytes, init)?,
-            Inner::Vulkan(d) => d.create_host_buffer(bytes, init)?,
-            Inner::Cpu(d) => d.create_buffer(bytes, init)?,
-        };
+        let raw = self.backend.create_uniform_buffer(bytes, init)?;
         Ok(GpuBuffer::new(raw, 1))
     }
 
@@ -296,22 +275,14 @@ impl Device {
         }
         let offset = elem_bytes::<T>(first);
         let bytes: &[u8] = bytemuck::cast_slice(data);
-        match &self.inner {
-            Inner::Wgpu(d) => d.write(&buf.raw, offset, bytes),
-            Inner::Vulkan(d) => d.write(&buf.raw, offset, bytes),
-            Inner::Cpu(d) => d.write(&buf.raw, offset, bytes),
-        }
+        self.backend.write(&buf.raw, offset, bytes)
     }
 
     /// Copies the whole buffer back to the host, after all previously submitted work.
     pub fn read<T: bytemuck::Pod>(&self, buf: &GpuBuffer<T>) -> Result<Vec<T>> {
         let mut out = vec![T::zeroed(); buf.len()];
         let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
-        match &self.inner {
-            Inner::Wgpu(d) => d.read(&buf.raw, dst)?,
-            Inner::Vulkan(d) => d.read(&buf.raw, dst)?,
-            Inner::Cpu(d) => d.read(&buf.raw, dst)?,
-        }
+        self.backend.read(&buf.raw, dst)?;
         Ok(out)
     }
 
@@ -330,13 +301,9 @@ impl Device {
     /// Starts recording dispatches that are submitted together, in order, each seeing the
     /// writes of the ones before it.
     pub fn batch(&self) -> Batch<'_> {
-        let pending = match &self.inner {
-            Inner::Wgpu(d) => Pending::Wgpu(d, Vec::new(), Vec::new()),
-            Inner::Vulkan(d) => Pending::Vulkan(d, Vec::new(), Vec::new()),
-            Inner::Cpu(d) => Pending::Cpu(d, Vec::new(), Vec::new()),
-        };
         Batch {
-            pending,
+            recording: self.backend.begin(),
+            reads: 0,
             device: self,
             prints: Vec::new(),
         }
@@ -345,31 +312,18 @@ impl Device {
     /// Vulkan validation-layer errors and warnings collected since the last call (wgpu:
     /// errors wgpu reported outside any operation of this crate).
     pub fn take_validation_messages(&self) -> Vec<String> {
-        match &self.inner {
-            Inner::Wgpu(d) => d.take_messages(),
-            Inner::Vulkan(d) => d.take_messages(),
-            Inner::Cpu(_) => Vec::new(),
-        }
+        self.backend.take_messages()
     }
 
     /// Compiles the pipeline of `kernel` now (or finds it cached), so that the first
     /// dispatch does not pay for it: a renderer prepares its kernels before it is timed.
     pub fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        match &self.inner {
-            Inner::Wgpu(d) => d.prepare(kernel),
-            Inner::Vulkan(d) => d.prepare(kernel),
-            // Nothing to compile: the host function is part of the program.
-            Inner::Cpu(_) => Ok(()),
-        }
+        self.backend.prepare(kernel)
     }
 
     /// How many pipelines this device has compiled and cached.
     pub fn cached_pipeline_count(&self) -> usize {
-        match &self.inner {
-            Inner::Wgpu(d) => d.pipelines.len(),
-            Inner::Vulkan(d) => d.pipelines.len(),
-            Inner::Cpu(_) => 0,
-        }
+        self.backend.cached_pipeline_count()
     }
 }
 
@@ -377,28 +331,12 @@ fn elem_bytes<T>(len: usize) -> u64 {
     (len as u64) * std::mem::size_of::<T>() as u64
 }
 
-enum Pending<'d> {
-    Wgpu(
-        &'d wgpu_backend::WgpuDevice,
-        Vec<wgpu_backend::Cmd>,
-        Vec<(wgpu::Buffer, u64)>,
-    ),
-    Vulkan(
-        &'d vulkan_backend::VkDevice,
-        Vec<vulkan_backend::Cmd>,
-        Vec<(Arc<vulkan_backend::Buffer>, u64)>,
-    ),
-    Cpu(
-        &'d cpu_backend::CpuDevice,
-        Vec<cpu_backend::Cmd>,
-        Vec<(Arc<cpu_backend::CpuBuffer>, u64)>,
-    ),
-}
-
 /// Dispatches recorded for one submission. Nothing reaches the GPU before `submit` or
 /// `submit_async`.
 pub struct Batch<'d> {
-    pending: Pending<'d>,
+    recording: Box<dyn Recording<'d> + 'd>,
+    /// Read-backs asked for so far.
+    reads: usize,
     device: &'d Device,
     /// The print buffers of the printing dispatches recorded so far.
     prints: Vec<PendingPrint>,
@@ -438,18 +376,11 @@ impl Completed {
     }
 }
 
-enum InFlight<'d> {
-    Wgpu(&'d wgpu_backend::WgpuDevice, wgpu_backend::WgpuInFlight),
-    Vulkan(vulkan_backend::VkInFlight),
-    /// The CPU backend runs a batch when it is submitted.
-    Done(Vec<DispatchStats>, Vec<Vec<u8>>),
-}
-
 /// A batch on the GPU. The host goes on (e.g. records the next batch) until it calls
 /// [`wait`](Submission::wait); submissions run in the order they were made. Dropping one
 /// without waiting waits for it.
 pub struct Submission<'d> {
-    inner: InFlight<'d>,
+    inner: Box<dyn InFlight + 'd>,
     prints: Vec<PendingPrint>,
 }
 
@@ -457,11 +388,7 @@ impl Submission<'_> {
     /// Waits until the GPU has run the batch, then writes what its kernels printed to
     /// stdout and stderr (a submission dropped without waiting prints nothing).
     pub fn wait(self) -> Result<Completed> {
-        let (stats, reads) = match self.inner {
-            InFlight::Wgpu(d, f) => d.wait_for(f)?,
-            InFlight::Vulkan(f) => f.wait()?,
-            InFlight::Done(stats, reads) => (stats, reads),
-        };
+        let (stats, reads) = self.inner.wait()?;
         let completed = Completed { stats, reads };
         for p in &self.prints {
             print::emit(&p.kernel, &print::decode(&p.sites, &completed.read(p.read)));
@@ -490,10 +417,7 @@ impl<'d> Batch<'d> {
             .position(|b| b.name == print::PRINT_BINDING);
         let print_buffer = match print_at {
             Some(at) if args.len() + 1 == kernel.bindings.len() && at <= args.len() => {
-                let words = match self.device.info().backend {
-                    BackendKind::Cpu => print::HEADER_WORDS + 1,
-                    _ => print::buffer_words(),
-                };
+                let words = self.device.backend.print_buffer_words();
                 Some((at, self.device.alloc::<u32>(words)?))
             }
             _ => None,
@@ -519,21 +443,9 @@ impl<'d> Batch<'d> {
         args: &[BufferArg<'_>],
         dispatch: Dispatch<'_>,
     ) -> Result<()> {
-        match &mut self.pending {
-            Pending::Wgpu(d, cmds, _) => {
-                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
-                cmds.push(d.record(kernel, args, &dispatch)?);
-            }
-            Pending::Vulkan(d, cmds, _) => {
-                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
-                cmds.push(d.record(kernel, args, &dispatch)?);
-            }
-            Pending::Cpu(d, cmds, _) => {
-                check_call(&d.info, &d.limits, kernel, args, &dispatch)?;
-                cmds.push(d.record(kernel, args, &dispatch)?);
-            }
-        }
-        Ok(())
+        let backend = &self.device.backend;
+        check_call(backend.info(), backend.limits(), kernel, args, &dispatch)?;
+        self.recording.record(kernel, args, &dispatch)
     }
 
     /// Copies `buf` back to the host after all of the batch's dispatches, in the same
@@ -541,22 +453,10 @@ impl<'d> Batch<'d> {
     /// separate, blocking read.
     pub fn read_back<T: bytemuck::Pod>(&mut self, buf: &GpuBuffer<T>) -> Result<ReadBack<T>> {
         let bytes = elem_bytes::<T>(buf.len());
-        let index = match &mut self.pending {
-            Pending::Wgpu(d, _, reads) => {
-                reads.push((d.own_buffer(&buf.raw)?, bytes));
-                reads.len() - 1
-            }
-            Pending::Vulkan(d, _, reads) => {
-                reads.push((d.own_buffer(&buf.raw)?, bytes));
-                reads.len() - 1
-            }
-            Pending::Cpu(d, _, reads) => {
-                reads.push((d.own_buffer(&buf.raw)?, bytes));
-                reads.len() - 1
-            }
-        };
+        self.recording.read_back(&buf.raw, bytes)?;
+        self.reads += 1;
         Ok(ReadBack {
-            index,
+            index: self.reads - 1,
             len: buf.len(),
             _t: std::marker::PhantomData,
         })
@@ -564,11 +464,7 @@ impl<'d> Batch<'d> {
 
     /// Dispatches recorded so far.
     pub fn len(&self) -> usize {
-        match &self.pending {
-            Pending::Wgpu(_, cmds, _) => cmds.len(),
-            Pending::Vulkan(_, cmds, _) => cmds.len(),
-            Pending::Cpu(_, cmds, _) => cmds.len(),
-        }
+        self.recording.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -583,19 +479,12 @@ impl<'d> Batch<'d> {
     /// Submits everything as one command buffer and returns at once.
     pub fn submit_async(self) -> Result<Submission<'d>> {
         let prints = self.prints;
-        let inner = match self.pending {
-            Pending::Wgpu(d, cmds, reads) => InFlight::Wgpu(d, d.submit_async(cmds, reads)?),
-            Pending::Vulkan(d, cmds, reads) => InFlight::Vulkan(d.submit_async(cmds, reads)?),
-            Pending::Cpu(d, cmds, reads) => {
-                let (stats, reads) = d.submit(cmds, reads)?;
-                InFlight::Done(stats, reads)
-            }
-        };
+        let inner = self.recording.submit()?;
         Ok(Submission { inner, prints })
     }
 }
 
-/// Host-side checks shared by both backends, done before any GPU object is touched.
+/// Host-side checks shared by every backend, done before any GPU object is touched.
 fn check_call(
     info: &DeviceInfo,
     limits: &Limits,

@@ -9,7 +9,8 @@
 //! pipeline (lowered and compiled once per device), a bind group / descriptor set and one
 //! queue submission, optionally timed with GPU timestamps ([`DispatchStats`]).
 //!
-//! Module map: `artifact` (what a backend is handed), `device` (the public facade,
+//! Module map: `artifact` (what a backend is handed), `backend` (the trait every backend
+//! implements, and the type-erased buffer handle), `device` (the public facade,
 //! argument checks, batches), `buffer` (typed buffers and size rules), `wgpu_backend`,
 //! `vulkan_init` (opening a raw Vulkan device) and `vulkan_backend` (buffers, pipelines,
 //! submission on it), `cpu_backend` and `cpu` (the CPU backend and its lanes),
@@ -17,6 +18,7 @@
 //! nanoseconds), `print` (kernels' print buffers, decoded after a dispatch), `error`.
 
 pub mod artifact;
+mod backend;
 mod buffer;
 pub mod cpu;
 mod cpu_backend;

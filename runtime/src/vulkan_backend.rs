@@ -19,7 +19,8 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use crate::buffer::{storage_binding_size, uniform_binding_size, RawBuffer};
+use crate::backend::{resolve, Arg, Backend, Groups, InFlight, Recorded, Recording, Records};
+use crate::buffer::RawBuffer;
 use crate::device::Limits;
 use crate::error::VkContext;
 use crate::pipeline_cache::{Code, PipelineCache};
@@ -68,14 +69,18 @@ pub(crate) struct Pipeline {
 pub(crate) struct Cmd {
     kernel: String,
     pipeline: Arc<Pipeline>,
-    /// (binding index, descriptor type, buffer, bound bytes)
-    bindings: Vec<(u32, vk::DescriptorType, Arc<Buffer>, u64)>,
-    groups: Groups,
+    bindings: Vec<Arg<Arc<Buffer>>>,
+    groups: Groups<Arc<Buffer>>,
 }
 
-enum Groups {
-    Direct([u32; 3]),
-    Indirect(Arc<Buffer>, u64),
+/// The descriptor type a binding of `kind` is.
+fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
+    match kind {
+        BindingKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
+        BindingKind::StorageRead | BindingKind::StorageReadWrite => {
+            vk::DescriptorType::STORAGE_BUFFER
+        }
+    }
 }
 
 /// Serialises queue access (Vulkan requires external synchronisation of queues and
@@ -190,10 +195,6 @@ impl VkDevice {
         })
     }
 
-    pub(crate) fn take_messages(&self) -> Vec<String> {
-        std::mem::take(&mut *lock(&self.shared.messages))
-    }
-
     /// Validation messages logged since `mark` (a length of the list), without draining
     /// them, to attach to an error.
     fn messages_since(&self, mark: usize) -> Vec<String> {
@@ -208,11 +209,8 @@ impl VkDevice {
         lock(&self.shared.messages).len()
     }
 
-    fn own<'a>(&self, raw: &'a RawBuffer) -> Option<&'a Arc<Buffer>> {
-        match raw {
-            RawBuffer::Vulkan(b) if b.device_id == self.id => Some(b),
-            _ => None,
-        }
+    fn own(&self, raw: &RawBuffer) -> Option<Arc<Buffer>> {
+        raw.get::<Buffer>().filter(|b| b.device_id == self.id)
     }
 
     fn new_buffer(
@@ -259,60 +257,6 @@ impl VkDevice {
     fn staging(&self, bytes: u64, location: MemoryLocation) -> Result<Buffer> {
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
         self.new_buffer(bytes, usage, location)
-    }
-
-    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
-    /// start and the rest is zeroed.
-    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
-        let buffer = self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?;
-        if init.is_empty() {
-            self.run(|d, cb| unsafe { d.cmd_fill_buffer(cb, buffer.raw, 0, vk::WHOLE_SIZE, 0) })?;
-        } else {
-            let mut staging = self.staging(bytes, MemoryLocation::CpuToGpu)?;
-            let mapped = mapped_bytes(&mut staging)?;
-            mapped[..init.len()].copy_from_slice(init);
-            mapped[init.len()..bytes as usize].fill(0);
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: bytes,
-            };
-            self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })?;
-        }
-        Ok(RawBuffer::Vulkan(Arc::new(buffer)))
-    }
-
-    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
-        let buffer = self
-            .own(raw)
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
-        let mut staging = self.staging(bytes.len() as u64, MemoryLocation::CpuToGpu)?;
-        mapped_bytes(&mut staging)?[..bytes.len()].copy_from_slice(bytes);
-        let region = vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: offset,
-            size: bytes.len() as u64,
-        };
-        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })
-    }
-
-    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
-        let buffer = self
-            .own(raw)
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
-        if dst.is_empty() {
-            return Ok(());
-        }
-        let mut staging = self.staging(dst.len() as u64, MemoryLocation::GpuToCpu)?;
-        let region = vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: 0,
-            size: dst.len() as u64,
-        };
-        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, buffer.raw, staging.raw, &[region]) })?;
-        let n = dst.len();
-        dst.copy_from_slice(&mapped_bytes(&mut staging)?[..n]);
-        Ok(())
     }
 
     /// Records `record` into a fresh command buffer between full memory barriers, submits
@@ -379,51 +323,6 @@ impl VkDevice {
             let _ = device.reset_command_pool(s.pool, vk::CommandPoolResetFlags::empty());
         }
         result
-    }
-
-    pub(crate) fn record(
-        &self,
-        kernel: &KernelArtifact,
-        args: &[BufferArg<'_>],
-        dispatch: &Dispatch<'_>,
-    ) -> Result<Cmd> {
-        let pipeline = self
-            .pipelines
-            .get_or_create(kernel, || self.create_pipeline(kernel))?;
-        let foreign = |param: &str| RuntimeError::ForeignBuffer {
-            kernel: kernel.name.clone(),
-            param: param.to_string(),
-        };
-        let mut bindings = Vec::with_capacity(args.len());
-        for (b, arg) in kernel.bindings.iter().zip(args) {
-            let buffer = self.own(arg.raw).ok_or_else(|| foreign(&b.name))?;
-            let (ty, size) = match b.kind {
-                BindingKind::Uniform => (
-                    vk::DescriptorType::UNIFORM_BUFFER,
-                    uniform_binding_size(arg.size_bytes),
-                ),
-                BindingKind::StorageRead | BindingKind::StorageReadWrite => (
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    storage_binding_size(arg.size_bytes),
-                ),
-            };
-            bindings.push((b.binding, ty, buffer.clone(), size));
-        }
-        let groups = match dispatch {
-            Dispatch::Groups(g) => Groups::Direct(*g),
-            Dispatch::Indirect { args, offset_elems } => {
-                let buffer = self
-                    .own(&args.raw)
-                    .ok_or_else(|| foreign("indirect arguments"))?;
-                Groups::Indirect(buffer.clone(), (*offset_elems as u64) * 4)
-            }
-        };
-        Ok(Cmd {
-            kernel: kernel.name.clone(),
-            pipeline,
-            bindings,
-            groups,
-        })
     }
 
     /// The subgroup size chained into the pipeline, after checking the device can do it.
@@ -498,10 +397,7 @@ impl VkDevice {
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b.binding)
-                    .descriptor_type(match b.kind {
-                        BindingKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
-                        _ => vk::DescriptorType::STORAGE_BUFFER,
-                    })
+                    .descriptor_type(descriptor_type(b.kind))
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -592,21 +488,7 @@ impl VkDevice {
         let mapped = mapped_bytes(&mut buffer)?;
         mapped[..init.len()].copy_from_slice(init);
         mapped[init.len()..bytes as usize].fill(0);
-        Ok(RawBuffer::Vulkan(Arc::new(buffer)))
-    }
-
-    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
-    pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.pipelines
-            .get_or_create(kernel, || self.create_pipeline(kernel))
-            .map(|_| ())
-    }
-
-    /// The buffer behind `raw`, for a read-back recorded in a batch.
-    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<Arc<Buffer>> {
-        self.own(raw)
-            .cloned()
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
+        Ok(RawBuffer::new(buffer))
     }
 
     /// Submits `cmds`, then copies of `reads` (buffer, bytes) to host memory, and returns
@@ -632,7 +514,7 @@ impl VkDevice {
         let count = |ty| {
             cmds.iter()
                 .flat_map(|c| &c.bindings)
-                .filter(|b| b.1 == ty)
+                .filter(|b| descriptor_type(b.kind) == ty)
                 .count() as u32
         };
         let mut f = VkInFlight {
@@ -718,10 +600,10 @@ impl VkDevice {
                 .map(|c| {
                     c.bindings
                         .iter()
-                        .map(|(_, _, buffer, size)| vk::DescriptorBufferInfo {
-                            buffer: buffer.raw,
+                        .map(|arg| vk::DescriptorBufferInfo {
+                            buffer: arg.buffer.raw,
                             offset: 0,
-                            range: *size,
+                            range: arg.binding_size(),
                         })
                         .collect()
                 })
@@ -731,16 +613,13 @@ impl VkDevice {
                 .zip(&sets)
                 .zip(&buffer_infos)
                 .flat_map(|((c, &set), infos)| {
-                    c.bindings
-                        .iter()
-                        .zip(infos)
-                        .map(move |((binding, ty, _, _), info)| {
-                            vk::WriteDescriptorSet::default()
-                                .dst_set(set)
-                                .dst_binding(*binding)
-                                .descriptor_type(*ty)
-                                .buffer_info(std::slice::from_ref(info))
-                        })
+                    c.bindings.iter().zip(infos).map(move |(arg, info)| {
+                        vk::WriteDescriptorSet::default()
+                            .dst_set(set)
+                            .dst_binding(arg.binding)
+                            .descriptor_type(descriptor_type(arg.kind))
+                            .buffer_info(std::slice::from_ref(info))
+                    })
                 })
                 .collect();
             unsafe { device.update_descriptor_sets(&writes, &[]) };
@@ -1001,6 +880,136 @@ unsafe fn barrier(
             &[],
         )
     };
+}
+
+impl Backend for VkDevice {
+    fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
+    /// start and the rest is zeroed.
+    fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        let buffer = self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?;
+        if init.is_empty() {
+            self.run(|d, cb| unsafe { d.cmd_fill_buffer(cb, buffer.raw, 0, vk::WHOLE_SIZE, 0) })?;
+        } else {
+            let mut staging = self.staging(bytes, MemoryLocation::CpuToGpu)?;
+            let mapped = mapped_bytes(&mut staging)?;
+            mapped[..init.len()].copy_from_slice(init);
+            mapped[init.len()..bytes as usize].fill(0);
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: bytes,
+            };
+            self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })?;
+        }
+        Ok(RawBuffer::new(buffer))
+    }
+
+    fn create_uniform_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        self.create_host_buffer(bytes, init)
+    }
+
+    fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
+        let mut staging = self.staging(bytes.len() as u64, MemoryLocation::CpuToGpu)?;
+        mapped_bytes(&mut staging)?[..bytes.len()].copy_from_slice(bytes);
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: offset,
+            size: bytes.len() as u64,
+        };
+        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })
+    }
+
+    fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
+        if dst.is_empty() {
+            return Ok(());
+        }
+        let mut staging = self.staging(dst.len() as u64, MemoryLocation::GpuToCpu)?;
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: dst.len() as u64,
+        };
+        self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, buffer.raw, staging.raw, &[region]) })?;
+        let n = dst.len();
+        dst.copy_from_slice(&mapped_bytes(&mut staging)?[..n]);
+        Ok(())
+    }
+
+    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
+    fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        self.pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))
+            .map(|_| ())
+    }
+
+    fn take_messages(&self) -> Vec<String> {
+        std::mem::take(&mut *lock(&self.shared.messages))
+    }
+
+    fn cached_pipeline_count(&self) -> usize {
+        self.pipelines.len()
+    }
+
+    fn begin(&self) -> Box<dyn Recording<'_> + '_> {
+        Recorded::start(self)
+    }
+}
+
+impl Records for VkDevice {
+    type Cmd = Cmd;
+    type ReadBuffer = Arc<Buffer>;
+
+    fn record_cmd(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        let pipeline = self
+            .pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))?;
+        let (bindings, groups) = resolve(kernel, args, dispatch, |raw| self.own(raw))?;
+        Ok(Cmd {
+            kernel: kernel.name.clone(),
+            pipeline,
+            bindings,
+            groups,
+        })
+    }
+
+    /// The buffer behind `raw`, for a read-back recorded in a batch.
+    fn read_buffer(&self, raw: &RawBuffer) -> Result<Arc<Buffer>> {
+        self.own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
+    }
+
+    fn submit_cmds<'d>(
+        &'d self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(Arc<Buffer>, u64)>,
+    ) -> Result<Box<dyn InFlight + 'd>> {
+        Ok(Box::new(self.submit_async(cmds, reads)?))
+    }
+}
+
+impl InFlight for VkInFlight {
+    fn wait(self: Box<Self>) -> Result<(Vec<DispatchStats>, Vec<Vec<u8>>)> {
+        VkInFlight::wait(*self)
+    }
 }
 
 /// SPIR-V 1.3 of a compiled kernel: what this backend hands the driver. A failure is a

@@ -13,7 +13,8 @@ use std::num::NonZeroU64;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
 
-use crate::buffer::{round_up, storage_binding_size, uniform_binding_size, RawBuffer};
+use crate::backend::{resolve, Arg, Backend, Groups, InFlight, Recorded, Recording, Records};
+use crate::buffer::{round_up, RawBuffer};
 use crate::device::Limits;
 use crate::pipeline_cache::{Code, PipelineCache};
 use crate::{
@@ -41,14 +42,8 @@ pub(crate) struct Pipeline {
 pub(crate) struct Cmd {
     kernel: String,
     pipeline: Arc<Pipeline>,
-    /// (binding index, buffer, bound bytes)
-    bindings: Vec<(u32, wgpu::Buffer, u64)>,
-    groups: Groups,
-}
-
-enum Groups {
-    Direct([u32; 3]),
-    Indirect(wgpu::Buffer, u64),
+    bindings: Vec<Arg<wgpu::Buffer>>,
+    groups: Groups<wgpu::Buffer>,
 }
 
 pub(crate) struct WgpuDevice {
@@ -213,176 +208,10 @@ impl WgpuDevice {
         })
     }
 
-    pub(crate) fn take_messages(&self) -> Vec<String> {
-        std::mem::take(&mut *self.messages.lock().unwrap_or_else(|p| p.into_inner()))
-    }
-
     fn own<'a>(&self, raw: &'a RawBuffer) -> Option<&'a wgpu::Buffer> {
-        match raw {
-            RawBuffer::Wgpu(b) if b.device_id == self.id => Some(&b.buffer),
-            _ => None,
-        }
-    }
-
-    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
-    /// start. wgpu zero-initialises the rest.
-    pub(crate) fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
-        if bytes > self.max_buffer_size {
-            return Err(RuntimeError::Allocation {
-                backend: BACKEND,
-                bytes,
-                detail: format!("the device's max_buffer_size is {}", self.max_buffer_size),
-            });
-        }
-        let scope = Scope::push(&self.device);
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: None,
-            size: bytes,
-            usage: BUFFER_USAGE,
-            mapped_at_creation: !init.is_empty(),
-        });
-        if !init.is_empty() {
-            // Mapping at creation writes straight into the allocation: no staging copy.
-            let mut view =
-                buffer
-                    .slice(..)
-                    .get_mapped_range_mut()
-                    .map_err(|e| RuntimeError::Wgpu {
-                        context: "buffer mapping",
-                        detail: e.to_string(),
-                    })?;
-            view.slice(..init.len()).copy_from_slice(init);
-            drop(view);
-            buffer.unmap();
-        }
-        scope.pop().map_err(|detail| RuntimeError::Allocation {
-            backend: BACKEND,
-            bytes,
-            detail,
-        })?;
-        Ok(RawBuffer::Wgpu(Buffer {
-            device_id: self.id,
-            buffer,
-        }))
-    }
-
-    pub(crate) fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
-        let buffer = self
-            .own(raw)
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
-        let align = wgpu::COPY_BUFFER_ALIGNMENT;
-        if offset % align != 0 {
-            return Err(RuntimeError::Unaligned {
-                what: "a write offset",
-                bytes: offset,
-            });
-        }
-        if bytes.len() as u64 % align != 0 {
-            return Err(RuntimeError::Unaligned {
-                what: "a write",
-                bytes: bytes.len() as u64,
-            });
-        }
-        let scope = Scope::push(&self.device);
-        // Staged by wgpu and executed before the next submission, which keeps it ordered
-        // before any later dispatch or read.
-        self.queue.write_buffer(buffer, offset, bytes);
-        scope.pop().map_err(|detail| RuntimeError::Wgpu {
-            context: "write_buffer",
-            detail,
-        })
-    }
-
-    pub(crate) fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
-        let buffer = self
-            .own(raw)
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
-        if dst.is_empty() {
-            return Ok(());
-        }
-        // Allocations are multiples of 16 bytes, so the rounded copy stays inside.
-        let size = round_up(dst.len() as u64, wgpu::COPY_BUFFER_ALIGNMENT);
-        let scope = Scope::push(&self.device);
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("cohort readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        let index = self.queue.submit([enc.finish()]);
-        let mapped = map_read(&staging);
-        self.wait(index)?;
-        scope.pop().map_err(|detail| RuntimeError::Wgpu {
-            context: "read",
-            detail,
-        })?;
-        receive_map(mapped)?;
-        let view = staging
-            .slice(..)
-            .get_mapped_range()
-            .map_err(|e| RuntimeError::Wgpu {
-                context: "buffer mapping",
-                detail: e.to_string(),
-            })?;
-        dst.copy_from_slice(&view[..dst.len()]);
-        Ok(())
-    }
-
-    pub(crate) fn record(
-        &self,
-        kernel: &KernelArtifact,
-        args: &[BufferArg<'_>],
-        dispatch: &Dispatch<'_>,
-    ) -> Result<Cmd> {
-        if let Some(n) = kernel.features.required_subgroup_size {
-            let (min, max) = (self.info.subgroup_size_min, self.info.subgroup_size_max);
-            if !(min == max && n == min) {
-                return Err(RuntimeError::SubgroupSize {
-                    kernel: kernel.name.clone(),
-                    backend: BACKEND,
-                    required: n,
-                    detail: format!(
-                        "wgpu cannot pin a pipeline's subgroup size and this adapter's sizes \
-                         range over [{min}, {max}]; use the vulkan backend"
-                    ),
-                });
-            }
-        }
-        let pipeline = self
-            .pipelines
-            .get_or_create(kernel, || self.create_pipeline(kernel))?;
-        let foreign = |param: &str| RuntimeError::ForeignBuffer {
-            kernel: kernel.name.clone(),
-            param: param.to_string(),
-        };
-        let mut bindings = Vec::with_capacity(args.len());
-        for (b, arg) in kernel.bindings.iter().zip(args) {
-            let buffer = self.own(arg.raw).ok_or_else(|| foreign(&b.name))?;
-            let size = match b.kind {
-                BindingKind::Uniform => uniform_binding_size(arg.size_bytes),
-                BindingKind::StorageRead | BindingKind::StorageReadWrite => {
-                    storage_binding_size(arg.size_bytes)
-                }
-            };
-            bindings.push((b.binding, buffer.clone(), size));
-        }
-        let groups = match dispatch {
-            Dispatch::Groups(g) => Groups::Direct(*g),
-            Dispatch::Indirect { args, offset_elems } => {
-                let buffer = self
-                    .own(&args.raw)
-                    .ok_or_else(|| foreign("indirect arguments"))?;
-                Groups::Indirect(buffer.clone(), (*offset_elems as u64) * 4)
-            }
-        };
-        Ok(Cmd {
-            kernel: kernel.name.clone(),
-            pipeline,
-            bindings,
-            groups,
-        })
+        raw.get_ref::<Buffer>()
+            .filter(|b| b.device_id == self.id)
+            .map(|b| &b.buffer)
     }
 
     fn create_pipeline(&self, kernel: &KernelArtifact) -> Result<Pipeline> {
@@ -463,20 +292,6 @@ impl WgpuDevice {
         })
     }
 
-    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
-    pub(crate) fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.pipelines
-            .get_or_create(kernel, || self.create_pipeline(kernel))
-            .map(|_| ())
-    }
-
-    /// The buffer behind `raw`, for a read-back recorded in a batch.
-    pub(crate) fn own_buffer(&self, raw: &RawBuffer) -> Result<wgpu::Buffer> {
-        self.own(raw)
-            .cloned()
-            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
-    }
-
     /// Submits `cmds`, then copies of `reads` (buffer, bytes) into mappable buffers, and
     /// returns without waiting (wgpu queues submissions in order).
     pub(crate) fn submit_async(
@@ -506,12 +321,12 @@ impl WgpuDevice {
             let entries: Vec<wgpu::BindGroupEntry> = cmd
                 .bindings
                 .iter()
-                .map(|(binding, buffer, size)| wgpu::BindGroupEntry {
-                    binding: *binding,
+                .map(|arg| wgpu::BindGroupEntry {
+                    binding: arg.binding,
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer,
+                        buffer: &arg.buffer,
                         offset: 0,
-                        size: NonZeroU64::new(*size),
+                        size: NonZeroU64::new(arg.binding_size()),
                     }),
                 })
                 .collect();
@@ -761,6 +576,209 @@ fn error_text(e: &wgpu::Error) -> String {
         source = s.source();
     }
     text
+}
+
+impl Backend for WgpuDevice {
+    fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
+    /// start. wgpu zero-initialises the rest.
+    fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
+        if bytes > self.max_buffer_size {
+            return Err(RuntimeError::Allocation {
+                backend: BACKEND,
+                bytes,
+                detail: format!("the device's max_buffer_size is {}", self.max_buffer_size),
+            });
+        }
+        let scope = Scope::push(&self.device);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: bytes,
+            usage: BUFFER_USAGE,
+            mapped_at_creation: !init.is_empty(),
+        });
+        if !init.is_empty() {
+            // Mapping at creation writes straight into the allocation: no staging copy.
+            let mut view =
+                buffer
+                    .slice(..)
+                    .get_mapped_range_mut()
+                    .map_err(|e| RuntimeError::Wgpu {
+                        context: "buffer mapping",
+                        detail: e.to_string(),
+                    })?;
+            view.slice(..init.len()).copy_from_slice(init);
+            drop(view);
+            buffer.unmap();
+        }
+        scope.pop().map_err(|detail| RuntimeError::Allocation {
+            backend: BACKEND,
+            bytes,
+            detail,
+        })?;
+        Ok(RawBuffer::new(Buffer {
+            device_id: self.id,
+            buffer,
+        }))
+    }
+
+    fn write(&self, raw: &RawBuffer, offset: u64, bytes: &[u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "write" })?;
+        let align = wgpu::COPY_BUFFER_ALIGNMENT;
+        if offset % align != 0 {
+            return Err(RuntimeError::Unaligned {
+                what: "a write offset",
+                bytes: offset,
+            });
+        }
+        if bytes.len() as u64 % align != 0 {
+            return Err(RuntimeError::Unaligned {
+                what: "a write",
+                bytes: bytes.len() as u64,
+            });
+        }
+        let scope = Scope::push(&self.device);
+        // Staged by wgpu and executed before the next submission, which keeps it ordered
+        // before any later dispatch or read.
+        self.queue.write_buffer(buffer, offset, bytes);
+        scope.pop().map_err(|detail| RuntimeError::Wgpu {
+            context: "write_buffer",
+            detail,
+        })
+    }
+
+    fn read(&self, raw: &RawBuffer, dst: &mut [u8]) -> Result<()> {
+        let buffer = self
+            .own(raw)
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read" })?;
+        if dst.is_empty() {
+            return Ok(());
+        }
+        // Allocations are multiples of 16 bytes, so the rounded copy stays inside.
+        let size = round_up(dst.len() as u64, wgpu::COPY_BUFFER_ALIGNMENT);
+        let scope = Scope::push(&self.device);
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cohort readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        let index = self.queue.submit([enc.finish()]);
+        let mapped = map_read(&staging);
+        self.wait(index)?;
+        scope.pop().map_err(|detail| RuntimeError::Wgpu {
+            context: "read",
+            detail,
+        })?;
+        receive_map(mapped)?;
+        let view = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| RuntimeError::Wgpu {
+                context: "buffer mapping",
+                detail: e.to_string(),
+            })?;
+        dst.copy_from_slice(&view[..dst.len()]);
+        Ok(())
+    }
+
+    /// Compiles (or finds in the cache) the pipeline of `kernel` without dispatching it.
+    fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        self.pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))
+            .map(|_| ())
+    }
+
+    fn take_messages(&self) -> Vec<String> {
+        std::mem::take(&mut *self.messages.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+
+    fn cached_pipeline_count(&self) -> usize {
+        self.pipelines.len()
+    }
+
+    fn begin(&self) -> Box<dyn Recording<'_> + '_> {
+        Recorded::start(self)
+    }
+}
+
+impl Records for WgpuDevice {
+    type Cmd = Cmd;
+    type ReadBuffer = wgpu::Buffer;
+
+    fn record_cmd(
+        &self,
+        kernel: &KernelArtifact,
+        args: &[BufferArg<'_>],
+        dispatch: &Dispatch<'_>,
+    ) -> Result<Cmd> {
+        if let Some(n) = kernel.features.required_subgroup_size {
+            let (min, max) = (self.info.subgroup_size_min, self.info.subgroup_size_max);
+            if !(min == max && n == min) {
+                return Err(RuntimeError::SubgroupSize {
+                    kernel: kernel.name.clone(),
+                    backend: BACKEND,
+                    required: n,
+                    detail: format!(
+                        "wgpu cannot pin a pipeline's subgroup size and this adapter's sizes \
+                         range over [{min}, {max}]; use the vulkan backend"
+                    ),
+                });
+            }
+        }
+        let pipeline = self
+            .pipelines
+            .get_or_create(kernel, || self.create_pipeline(kernel))?;
+        let (bindings, groups) = resolve(kernel, args, dispatch, |raw| self.own(raw).cloned())?;
+        Ok(Cmd {
+            kernel: kernel.name.clone(),
+            pipeline,
+            bindings,
+            groups,
+        })
+    }
+
+    /// The buffer behind `raw`, for a read-back recorded in a batch.
+    fn read_buffer(&self, raw: &RawBuffer) -> Result<wgpu::Buffer> {
+        self.own(raw)
+            .cloned()
+            .ok_or(RuntimeError::BufferNotOnDevice { op: "read back" })
+    }
+
+    fn submit_cmds<'d>(
+        &'d self,
+        cmds: Vec<Cmd>,
+        reads: Vec<(wgpu::Buffer, u64)>,
+    ) -> Result<Box<dyn InFlight + 'd>> {
+        let submitted = self.submit_async(cmds, reads)?;
+        Ok(Box::new(Submitted {
+            device: self,
+            submitted,
+        }))
+    }
+}
+
+/// A submission and the device that waits for it.
+struct Submitted<'d> {
+    device: &'d WgpuDevice,
+    submitted: WgpuInFlight,
+}
+
+impl InFlight for Submitted<'_> {
+    fn wait(self: Box<Self>) -> Result<(Vec<DispatchStats>, Vec<Vec<u8>>)> {
+        self.device.wait_for(self.submitted)
+    }
 }
 
 /// A compiled kernel as WGSL: what this backend hands wgpu.
