@@ -1053,7 +1053,7 @@ fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
             opts.patches_n
         )));
     }
-    if opts.interleave & 1 == 0 || gcd(opts.interleave, w) != 1 || gcd(opts.interleave, h) != 1 {
+    if !interleave_permutes(opts.interleave, w, h) {
         return Err(RenderError::Options(format!(
             "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
             opts.interleave
@@ -1117,6 +1117,12 @@ fn slot_order(w: u32, h: u32, d: u32) -> Vec<u32> {
             ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
         })
         .collect()
+}
+
+/// Whether interleave factor `d` permutes the pixels of a `w` x `h` image (slot g renders
+/// pixel D * Morton(g), `slot_order`): `d` odd and coprime with both sides.
+pub fn interleave_permutes(d: u32, w: u32, h: u32) -> bool {
+    d & 1 == 1 && gcd(d, w) == 1 && gcd(d, h) == 1
 }
 
 fn gcd(a: u32, b: u32) -> u32 {

@@ -100,8 +100,8 @@ impl<'a> Sweep<'a> {
             self.plan.height.unwrap_or(scene.camera.height),
         );
         for &d in &self.plan.interleaves {
-            if gcd(d, w) != 1 || gcd(d, h) != 1 {
-                return Err(format!("bad --interleave value `{d}`: it must be coprime with the image size {w}x{h} of scene `{}`", spec.arg));
+            if !cohort_render::renderer::interleave_permutes(d, w, h) {
+                return Err(format!("bad --interleave value `{d}`: it must be odd and coprime with the image size {w}x{h} of scene `{}`", spec.arg));
             }
         }
         Ok(LoadedScene {
@@ -331,13 +331,5 @@ impl<'a> Sweep<'a> {
             measured.push((point, stats, image));
         }
         Ok(measured)
-    }
-}
-
-fn gcd(a: u32, b: u32) -> u32 {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
     }
 }
