@@ -16,8 +16,11 @@ fn devices() -> Vec<Device> {
         .collect()
 }
 
+/// Where the statistical tests render: a real GPU if there is one, else the CPU backend
+/// (about 3x the software Vulkan driver on CI's two cores; what the GPU backends compute is
+/// tied to it by `backends_agree_with_light_sampling`).
 fn first_device() -> Option<Device> {
-    devices().into_iter().next()
+    Some(Device::best().expect("the CPU backend always opens"))
 }
 
 fn shared(name: &str) -> Scene {
@@ -182,7 +185,7 @@ fn white_furnace_with_light_sampling() {
     );
     let scene = b.finish();
     let expect = le / (1.0 - a);
-    for d in devices() {
+    for d in devices().into_iter().chain(Device::for_tests(BackendKind::Cpu)) {
         let img = render(&d, &scene, opts(IntegratorKind::Nee, 32, 32, 3));
         for c in img.mean().to_array() {
             assert!(
@@ -294,12 +297,17 @@ fn coherent_light_sampling_is_unbiased() {
     }
 }
 
-/// The two backends run the same light-sampling kernels and give the same image, bit for bit.
+/// The GPU backends run the same light-sampling kernels and give the same image, bit for
+/// bit; the CPU backend gives it up to float rounding (fused multiply-adds, the last ulp of
+/// transcendentals), which may send a path another way: the image means agree to 1e-3 and
+/// at most 5 % of the pixel channels differ by more than 1e-3 relative.
 #[test]
 fn backends_agree_with_light_sampling() {
     let scene = shared("stanford-like");
+    let cpu = Device::for_tests(BackendKind::Cpu).expect("the CPU backend always opens");
     let imgs: Vec<Image> = devices()
         .iter()
+        .chain([&cpu])
         .map(|d| {
             render(
                 d,
@@ -311,6 +319,23 @@ fn backends_agree_with_light_sampling() {
             )
         })
         .collect();
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * a.abs().max(b.abs()).max(1e-3);
+    let (gpu, cpu) = imgs.split_at(imgs.len() - 1);
+    for img in gpu {
+        let differ = img
+            .pixels
+            .iter()
+            .zip(&cpu[0].pixels)
+            .map(|(a, b)| (0..3).filter(|&c| !close(a[c], b[c])).count())
+            .sum::<usize>();
+        let (ma, mb) = (img.mean(), cpu[0].mean());
+        assert!(
+            differ * 20 <= 3 * img.pixels.len() && (0..3).all(|c| close(ma[c], mb[c])),
+            "{differ} of {} pixel channels differ between a GPU backend and the CPU backend (mean {ma} vs {mb})",
+            3 * img.pixels.len()
+        );
+    }
+    let imgs = gpu;
     if imgs.len() == 2 {
         let differ = imgs[0]
             .pixels
