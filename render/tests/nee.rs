@@ -185,7 +185,10 @@ fn white_furnace_with_light_sampling() {
     );
     let scene = b.finish();
     let expect = le / (1.0 - a);
-    for d in devices().into_iter().chain(Device::for_tests(BackendKind::Cpu)) {
+    for d in devices()
+        .into_iter()
+        .chain(Device::for_tests(BackendKind::Cpu))
+    {
         let img = render(&d, &scene, opts(IntegratorKind::Nee, 32, 32, 3));
         for c in img.mean().to_array() {
             assert!(
