@@ -38,7 +38,7 @@ pub fn compile_with_host(
     let host = host.map(|h| HostKernel {
         invoke: h.invoke,
         workgroup_vars: h.workgroup_vars,
-        group: match compiled.group {
+        group: match compiled.spec.group {
             Group::Thread => GroupLevel::Thread,
             Group::Warp => GroupLevel::Warp,
             Group::Block(_) => GroupLevel::Block,

@@ -13,7 +13,7 @@ use naga::valid::{Capabilities, ModuleInfo, ValidationFlags, Validator};
 
 use crate::abi::{Binding, KernelFeatures, PrintSite};
 use crate::ir::kernel::BuiltKernel;
-use crate::spec::{Group, Spec};
+use crate::spec::Spec;
 
 /// A kernel that could not be compiled. Type-correct kernel source should never produce
 /// one in a later stage than `build`: that is a compiler bug, reported at the kernel's
@@ -66,8 +66,6 @@ pub struct CompiledKernel {
     pub features: KernelFeatures,
     /// The kernel's `print!`-family calls, indexed by the site number its records carry.
     pub prints: Vec<PrintSite>,
-    /// The coherence group level it was specialised for.
-    pub group: Group,
     /// Whether invocations wait for each other: a barrier or a subgroup operation anywhere
     /// in the module (group operations above thread level lower to these).
     pub synchronises: bool,
@@ -130,7 +128,6 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<CompiledKernel, Comp
             required_subgroup_size: built.spec.required_subgroup_size,
         },
         prints: built.prints.clone(),
-        group: built.spec.group,
         synchronises: synchronises(&module),
         location: format!(
             "{}:{}:{}",

@@ -21,7 +21,7 @@ use std::path::PathBuf;
 
 use cohort::runtime::{BackendKind, Device};
 use cohort_render::input::read_exr;
-use cohort_render::{Budget, IntegratorKind, RenderOptions, Renderer, Roulette};
+use cohort_render::{Budget, Image, IntegratorKind, RenderOptions, Renderer, Roulette};
 use cohort_scenes::Scene;
 use glam::{Mat3, Vec3};
 
@@ -160,7 +160,7 @@ fn paths_per_pixel(w: u32, h: u32) -> u32 {
     (sample_budget() / (w * h)).max(1)
 }
 
-fn render(device: &Device, scene: &Scene, spp: u32) -> Vec<Vec3> {
+fn render(device: &Device, scene: &Scene, spp: u32) -> Image {
     let opts = RenderOptions {
         integrator: IntegratorKind::Nee,
         roulette: Roulette::Mitsuba,
@@ -172,7 +172,7 @@ fn render(device: &Device, scene: &Scene, spp: u32) -> Vec<Vec3> {
         .unwrap()
         .render(|_, _| {})
         .unwrap();
-    img.pixels
+    img
 }
 
 /// A GPU backend's image and the CPU backend's image of the same paths (same seed and
@@ -188,14 +188,14 @@ fn render(device: &Device, scene: &Scene, spp: u32) -> Vec<Vec3> {
 fn assert_same_paths(
     name: &str,
     kind: BackendKind,
-    image: &[Vec3],
-    cpu: &[Vec3],
+    image: &Image,
+    cpu: &Image,
     variance: &[Vec3],
     spp: u32,
 ) {
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * a.abs().max(b.abs()).max(1e-3);
     let (mut differ, mut disagree) = (0, 0);
-    for ((a, b), v) in image.iter().zip(cpu).zip(variance) {
+    for ((a, b), v) in image.pixels.iter().zip(&cpu.pixels).zip(variance) {
         for c in 0..3 {
             if !close(a[c], b[c]) {
                 differ += 1;
@@ -205,9 +205,8 @@ fn assert_same_paths(
             }
         }
     }
-    let total = 3 * image.len();
-    let mean = |img: &[Vec3]| img.iter().copied().sum::<Vec3>() / img.len() as f32;
-    let (ma, mb) = (mean(image), mean(cpu));
+    let total = 3 * image.pixels.len();
+    let (ma, mb) = (image.mean(), cpu.mean());
     eprintln!(
         "{name} on {kind:?}: {differ} of {total} pixel channels differ from the CPU backend's, {disagree} beyond chance"
     );
@@ -259,8 +258,13 @@ fn verdicts(
         let start = std::time::Instant::now();
         let image = render(&device, &scene, spp);
         let seconds = start.elapsed().as_secs_f64();
-        let v = z_test(&image, spp, &reference.image.pixels, &variance.image.pixels);
-        let mean = image.iter().copied().sum::<Vec3>() / image.len() as f32;
+        let v = z_test(
+            &image.pixels,
+            spp,
+            &reference.image.pixels,
+            &variance.image.pixels,
+        );
+        let mean = image.mean();
         eprintln!(
             "{name} on {kind:?} ({spp} paths per pixel, {seconds:.1} s): {}/{} pixel channels pass (min p-value {:.3e}, significance {:.3e}); mean {mean} vs {}",
             v.passed,
