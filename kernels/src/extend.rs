@@ -21,6 +21,10 @@ use crate::sampling::{
     cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
+use crate::scatter::{
+    blend_eval, blend_traits, blend_weight, scatter_eval, BLEND_LEVELS, BLEND_NOT_PLAIN,
+    BLEND_READS_UV,
+};
 use crate::texture::{hit_uv, luminance, texture_at_hit};
 use cohort::prelude::*;
 
@@ -387,28 +391,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // probability `blend_weight`, then alone, for shading, light sampling and MIS
                 // alike: in expectation the blend's weighted sum. A second BSDF that is a
                 // blend itself chooses again.
-                let mut m = materials[t.material as usize];
+                let root = materials[t.material as usize];
+                let mut m = root;
                 let mut level = 0u32;
-                while level < 4 && m.blend != 0 {
-                    let mut weight = m.blend_weight;
-                    if m.blend_texture != 0 {
-                        let buv = hit_uv(tex_coords, t.original, h);
-                        weight = luminance(texture_at_hit(
-                            textures,
-                            m.blend_texture - 1,
-                            buv,
-                            t.original,
-                            h,
-                        ))
-                        .clamp(0.0, 1.0);
-                    }
+                while level < BLEND_LEVELS && m.blend != 0 {
+                    let weight = blend_weight(textures, tex_coords, m, t, h);
                     if uniform(key, 10 + level) < weight {
                         m = materials[(m.blend - 1) as usize];
                         level += 1;
                     } else {
-                        level = 4;
+                        level = BLEND_LEVELS;
                     }
                 }
+                // Light samples and MIS densities see the blend's weighted sum
+                // (`crate::scatter`), where its BSDFs share the surface.
+                let mut traits = 0u32;
+                if root.blend != 0 {
+                    traits = blend_traits(materials, root);
+                }
+                let mixture = I::NEE && root.blend != 0 && traits & BLEND_NOT_PLAIN == 0;
                 // A hit on a (numerically) degenerate triangle has no normal: shade it as
                 // facing the ray rather than let a NaN normal into the next ray.
                 let cr = (t.v1 - t.v0).cross(t.v2 - t.v0);
@@ -441,6 +442,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // texture's here.
                 let mut uv = Vec2::ZERO;
                 if m.texture != 0
+                    || (mixture && traits & BLEND_READS_UV != 0)
                     || m.opacity_texture != 0
                     || m.perturb_texture != 0
                     || m.flags & READS_UV != 0
@@ -506,7 +508,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         || plastic
                         || rough_plastic
                         || rough_dielectric
-                        || principled)
+                        || principled
+                        || mixture)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -572,79 +575,17 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         }
                         if light_pdf > 0.0 || delta_select > 0.0 {
                             // f·cos and the BSDF-sampling density of `wi`.
-                            let fc: Vec3;
-                            let pdf_b: f32;
-                            if diffuse {
-                                let c = wi.dot(n).max(0.0);
-                                fc = albedo * (c * core::f32::consts::FRAC_1_PI);
-                                pdf_b = c * core::f32::consts::FRAC_1_PI;
-                            } else if plastic {
-                                // The coating's delta reflection cannot meet a light sample:
-                                // only the base scatters towards it.
-                                let c = wi.dot(n).max(0.0);
-                                let f_i = fresnel_dielectric(-d.dot(n), m.param);
-                                let f_o = fresnel_dielectric(c, m.param);
-                                let p_spec =
-                                    plastic_specular_probability(f_i, albedo, m.transmittance);
-                                let base = plastic_base(albedo, m.param, m.flags & NONLINEAR != 0);
-                                fc = base
-                                    * ((1.0 - f_i)
-                                        * (1.0 - f_o)
-                                        * c
-                                        * core::f32::consts::FRAC_1_PI);
-                                pdf_b = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
-                            } else if rough_dielectric {
-                                let e = crate::rough_dielectric::eval(
-                                    -d,
-                                    wi,
-                                    n,
-                                    eta_rd,
-                                    m.conductor_k.x,
-                                    m.flags & BECKMANN != 0,
+                            let mut e = scatter_eval(
+                                textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
+                            );
+                            if mixture {
+                                e = blend_eval(
+                                    materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
+                                    front,
                                 );
-                                let tint = if e.z > 0.0 { m.color } else { m.transmittance };
-                                fc = tint * e.x;
-                                pdf_b = e.y;
-                            } else if principled {
-                                let fr = crate::principled::frame(
-                                    m, textures, tex_coords, t, ng, n, front,
-                                );
-                                let pp = crate::principled::params(
-                                    textures, m, albedo, uv, t.original, h,
-                                );
-                                let e = crate::principled::eval_kind(
-                                    pp,
-                                    m.kind,
-                                    fr.transpose() * -d,
-                                    fr.transpose() * wi,
-                                );
-                                fc = e.truncate();
-                                pdf_b = e.w;
-                            } else if rough_plastic {
-                                let fr = crate::sampling::frame(n);
-                                let wo = fr.transpose() * -d;
-                                let wl = fr.transpose() * wi;
-                                let t_i = crate::rough_plastic::transmittance(textures, m, wo.z);
-                                let t_o = crate::rough_plastic::transmittance(textures, m, wl.z);
-                                let e = crate::rough_plastic::eval(wo, wl, m, albedo, t_i, t_o);
-                                fc = e.truncate();
-                                pdf_b = e.w;
-                            } else {
-                                let fr =
-                                    crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
-                                let a =
-                                    crate::rough_conductor::alpha(textures, m, uv, t.original, h);
-                                let e = crate::microfacet::conductor_eval(
-                                    fr.transpose() * -d,
-                                    fr.transpose() * wi,
-                                    a,
-                                    m.flags & BECKMANN != 0,
-                                );
-                                fc = albedo
-                                    * fresnel_conductor(e.z, m.transmittance, m.conductor_k)
-                                    * e.x;
-                                pdf_b = e.y;
                             }
+                            let fc = e.truncate();
+                            let pdf_b = e.w;
                             // A normal or bump map weighs the direction (and zeroes its
                             // density where it lies on different sides of the frames).
                             let mut pw = 1.0f32;
@@ -811,12 +752,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // then reflection with the Fresnel probability, else refraction. MIS
                     // weighs what it then meets against light sampling at this vertex.
                     let beckmann = m.flags & BECKMANN != 0;
-                    let alpha = m.conductor_k.x;
+                    let a = crate::rough_dielectric::alpha(textures, m, uv, t.original, h);
+                    let fr = crate::rough_dielectric::frame(m, tex_coords, t, ng, n, front);
                     let s = crate::rough_dielectric::sample(
                         -d,
-                        n,
+                        fr,
                         eta_rd,
-                        alpha,
+                        a,
                         beckmann,
                         u,
                         uniform(key, 4),
@@ -832,8 +774,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         }
                         thr = thr * tint * s.w;
                         alive = true;
-                        let e =
-                            crate::rough_dielectric::eval(-d, new_d, n, eta_rd, alpha, beckmann);
+                        let e = crate::rough_dielectric::eval(-d, new_d, fr, eta_rd, a, beckmann);
                         bsdf_pdf = e.y;
                         env_pdf = environment_pdf(f, textures, n, new_d);
                     }
@@ -852,6 +793,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * m.transmittance;
                     }
                     alive = true;
+                }
+                // A blend's sampled direction, drawn by one of its BSDFs, is weighed against
+                // light sampling by the blend's density (delta directions keep 0).
+                if mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through {
+                    bsdf_pdf = blend_eval(
+                        materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
+                    )
+                    .w;
                 }
                 // A normal or bump map weighs the sampled direction as it weighs light
                 // samples (Mitsuba's `sample`: zero on different sides of the frames).

@@ -45,7 +45,8 @@ pub const PLASTIC: u32 = 4;
 /// eta, `conductor_k` (alpha, internal reflectance, 0), `table` its transmittance table.
 pub const ROUGH_PLASTIC: u32 = 5;
 /// Mitsuba `roughdielectric`: `color` specular reflectance, `transmittance` specular
-/// transmittance, `param` eta (int/ext), `conductor_k.x` alpha; `BECKMANN` flag.
+/// transmittance, `param` eta (int/ext), `conductor_k.x` alpha, or `table` its roughness
+/// block where that is anisotropic or textured; `BECKMANN` flag.
 pub const ROUGH_DIELECTRIC: u32 = 6;
 /// Mitsuba `principled`: `color` base colour, `table` index + 1 of its parameter block in
 /// the texture array ([`Principled`] as `cohort_kernels::principled::params` reads it).
@@ -240,8 +241,9 @@ pub struct Frame {
 }
 
 /// One entry of the alias table over emitter triangles (Walker / Vose): draw entry `j`
-/// uniformly, then take `tri` with probability `prob`, else `alias_tri`. Each emitter
-/// triangle is chosen in proportion to its power (luminance of its radiance x area).
+/// uniformly, then take `tri` with probability `prob`, else `alias_tri`. Each emitter (an
+/// emitting shape or a delta light) is chosen with the same probability, a shape's triangles
+/// in proportion to their area (`cohort_render::lights`).
 /// The selection probability divided by the area is in the triangle's `light_pdf`, for
 /// the MIS weight of paths that hit it by BSDF sampling.
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]

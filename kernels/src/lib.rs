@@ -31,6 +31,7 @@ pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod sampling;
+pub mod scatter;
 pub mod shadow;
 pub mod texture;
 pub mod traverse;

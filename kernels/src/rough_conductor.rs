@@ -12,9 +12,24 @@ use cohort::prelude::*;
 /// coordinates `uv`), at least 1e-4 as Mitsuba clamps them.
 #[kernel_fn]
 pub fn alpha(textures: &[Vec4], m: Material, uv: Vec2, original: u32, h: Vec4) -> Vec2 {
-    let mut a = Vec2::new(m.param, m.param);
-    if m.table != 0 {
-        let b = textures[(m.table - 1) as usize];
+    roughness(textures, m.param, m.table, uv, original, h)
+}
+
+/// A microfacet roughness at a hit: `alpha` both ways, or the parameter block at `table`
+/// (index + 1; 0: none), at least 1e-4 as Mitsuba clamps it. Rough conductors and rough
+/// dielectrics keep their roughness so.
+#[kernel_fn]
+pub fn roughness(
+    textures: &[Vec4],
+    alpha: f32,
+    table: u32,
+    uv: Vec2,
+    original: u32,
+    h: Vec4,
+) -> Vec2 {
+    let mut a = Vec2::new(alpha, alpha);
+    if table != 0 {
+        let b = textures[(table - 1) as usize];
         a = Vec2::new(b.x, b.y);
         let tu = b.z.to_bits();
         let tv = b.w.to_bits();

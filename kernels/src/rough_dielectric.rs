@@ -1,45 +1,52 @@
 //! Mitsuba `roughdielectric` in the kernels: sampling a microfacet normal visible from the
-//! viewer (GGX; Beckmann by D(m) cos θ_m), then reflection off it with the Fresnel
-//! probability or refraction through it, weighted as Mitsuba weights its samples.
+//! viewer (GGX or Beckmann, anisotropic: Mitsuba's `sample_visible`, its default), then
+//! reflection off it with the Fresnel probability or refraction through it, weighted as
+//! Mitsuba weights its samples. Its roughness is read as the rough conductor's
+//! (`crate::rough_conductor`): a number in `Material::conductor_k.x`, or a parameter block
+//! (`Material::table`) where it is anisotropic or textured.
 
-use crate::sampling::{beckmann_g1, frame, fresnel_dielectric, microfacet_sample, smith_g1};
+use crate::layout::*;
+use crate::microfacet::{d, g1, visible_pdf, visible_sample};
+use crate::sampling::fresnel_dielectric;
 use cohort::prelude::*;
 
-/// Masking of direction cosine `cos` (to the macro normal, either side).
+/// (alpha_u, alpha_v) of rough dielectric `m` at hit `h` of triangle `original` (texture
+/// coordinates `uv`), at least 1e-4 as Mitsuba clamps them.
 #[kernel_fn]
-fn g1(cos: f32, alpha: f32, beckmann: bool) -> f32 {
-    let c = cos.abs();
-    if beckmann {
-        beckmann_g1(c, alpha)
-    } else {
-        smith_g1(c, alpha)
-    }
+pub fn alpha(textures: &[Vec4], m: Material, uv: Vec2, original: u32, h: Vec4) -> Vec2 {
+    crate::rough_conductor::roughness(textures, m.conductor_k.x, m.table, uv, original, h)
+}
+
+/// The frame rough dielectric `m` scatters in: z the shading normal `n` on the viewer's
+/// side (the interface is seen from either side, its index ratio inverted behind), x along
+/// dp/du where it has a parameter block (it may be anisotropic there).
+#[kernel_fn]
+pub fn frame(
+    m: Material,
+    tex_coords: &[Vec4],
+    tri: Triangle,
+    ng: Vec3,
+    n: Vec3,
+    front: bool,
+) -> Mat3 {
+    crate::perturb::tangent_frame(tex_coords, tri, ng, n, front, true, m.table != 0)
 }
 
 /// One scattering of the ray arriving from direction `wo` (pointing away from the surface,
-/// on the side `n` faces) at an interface of relative index `eta` (the far side's over the
-/// near side's): xyz = the new direction (world space), w = its weight without the
-/// reflectance / transmittance tint (0 when
-/// the sample is invalid: a microfacet facing away, or a direction on the wrong side).
+/// on the side the frame `fr`'s z faces) at an interface of relative index `eta` (the far
+/// side's over the near side's), roughness `a`: xyz = the new direction (world space), w =
+/// its weight without the reflectance / transmittance tint (0 when the sample is invalid:
+/// a microfacet facing away, or a direction on the wrong side).
 /// Radiance is not scaled by 1 / eta² on refraction (Mitsuba's importance transport, as
 /// the smooth dielectric): the factors of entering and leaving cancel, and the throughput
 /// then reads as Mitsuba's path integrator weighs it for Russian roulette.
 /// `u` picks the normal, `choice` reflection (below the Fresnel reflectance) or refraction.
 #[kernel_fn]
-pub fn sample(
-    wo: Vec3,
-    n: Vec3,
-    eta: f32,
-    alpha: f32,
-    beckmann: bool,
-    u: Vec2,
-    choice: f32,
-) -> Vec4 {
-    let fr = frame(n);
+pub fn sample(wo: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool, u: Vec2, choice: f32) -> Vec4 {
     let o = fr.transpose() * wo;
     let mut r = Vec4::ZERO;
     if o.z > 0.0 {
-        let m = microfacet_sample(o, alpha, beckmann, u);
+        let m = visible_sample(o, a, beckmann, u);
         let cos_om = o.dot(m);
         if cos_om > 0.0 {
             let f = fresnel_dielectric(cos_om, eta);
@@ -55,12 +62,9 @@ pub fn sample(
                 valid = i.z < 0.0;
             }
             if valid {
-                // GGX samples visible normals: the weight is the masking of the new
-                // direction; Beckmann samples D(m) cos θ_m: G |o·m| / (o.z m.z).
-                let mut w = g1(i.z, alpha, beckmann);
-                if beckmann {
-                    w *= g1(o.z, alpha, beckmann) * cos_om / (o.z * m.z);
-                }
+                // Visible normals drawn, reflection or refraction chosen by the Fresnel
+                // term: what remains is the masking of the new direction.
+                let w = g1(i, m, a, beckmann);
                 r = (fr * i).normalize().extend(w);
             }
         }
@@ -68,25 +72,14 @@ pub fn sample(
     r
 }
 
-/// The microfacet normal density with which [`sample`] draws `m` for a viewer at `o`
-/// (local): the visible normals' (GGX) or D(m) cos θ_m (Beckmann).
-#[kernel_fn]
-fn normal_pdf(o: Vec3, m: Vec3, alpha: f32, beckmann: bool) -> f32 {
-    if beckmann {
-        crate::sampling::beckmann_d(m.z, alpha) * m.z
-    } else {
-        crate::sampling::ggx_d(m.z, alpha) * g1(o.z, alpha, false) * o.dot(m).max(0.0) / o.z
-    }
-}
-
 /// For the viewer direction `wo` and a direction `wi` (both pointing away from the
-/// surface, world space; `n` faces the viewer): x = f·|cos| without the tint (which is the
-/// specular reflectance where z = 1, reflection, else the specular transmittance), y = the
-/// density with which [`sample`] produces `wi`, z = 1 for reflection. Mitsuba's
-/// `roughdielectric` `eval` and `pdf` without the radiance scale (see [`sample`]).
+/// surface, world space; the frame `fr`'s z faces the viewer): x = f·|cos| without the
+/// tint (which is the specular reflectance where z = 1, reflection, else the specular
+/// transmittance), y = the density with which [`sample`] produces `wi`, z = 1 for
+/// reflection. Mitsuba's `roughdielectric` `eval` and `pdf` without the radiance scale (see
+/// [`sample`]).
 #[kernel_fn]
-pub fn eval(wo: Vec3, wi: Vec3, n: Vec3, eta: f32, alpha: f32, beckmann: bool) -> Vec4 {
-    let fr = frame(n);
+pub fn eval(wo: Vec3, wi: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool) -> Vec4 {
     let o = fr.transpose() * wo;
     let i = fr.transpose() * wi;
     let mut r = Vec4::ZERO;
@@ -101,21 +94,17 @@ pub fn eval(wo: Vec3, wi: Vec3, n: Vec3, eta: f32, alpha: f32, beckmann: bool) -
         let im = i.dot(m);
         // Each direction must see the microfacet's front from its side of the surface.
         if om > 0.0 && im * i.z > 0.0 {
-            let d = if beckmann {
-                crate::sampling::beckmann_d(m.z, alpha)
-            } else {
-                crate::sampling::ggx_d(m.z, alpha)
-            };
+            let dm = d(m, a, beckmann);
             let f = fresnel_dielectric(om, eta);
-            let g = g1(o.z, alpha, beckmann) * g1(i.z, alpha, beckmann);
-            let pm = normal_pdf(o, m, alpha, beckmann);
+            let g = g1(o, m, a, beckmann) * g1(i, m, a, beckmann);
+            let pm = visible_pdf(o, m, a, beckmann);
             if reflect {
-                r = Vec4::new(f * d * g / (4.0 * o.z), pm * f / (4.0 * im), 1.0, 0.0);
+                r = Vec4::new(f * dm * g / (4.0 * o.z), pm * f / (4.0 * im), 1.0, 0.0);
             } else {
                 let denom = om + eta * im;
                 let jacobian = (eta * eta * im / (denom * denom)).abs();
                 r = Vec4::new(
-                    ((1.0 - f) * d * g * eta * eta * om * im / (o.z * denom * denom)).abs(),
+                    ((1.0 - f) * dm * g * eta * eta * om * im / (o.z * denom * denom)).abs(),
                     pm * (1.0 - f) * jacobian,
                     0.0,
                     0.0,

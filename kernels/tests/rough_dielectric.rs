@@ -1,10 +1,10 @@
 //! Mitsuba `roughdielectric` in the kernels: what `sample` weighs a direction by is what
 //! `eval` says (f·cos over the density), and the density `eval` reports integrates to 1
 //! over the sphere of directions, for both distributions, both sides of the interface and
-//! total internal reflection.
+//! total internal reflection, isotropic and anisotropic.
 
 use cohort_kernels::rough_dielectric::{eval, sample};
-use glam::{Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 
 struct Rng(u32);
 impl Rng {
@@ -24,16 +24,19 @@ fn direction(theta: f32, phi: f32) -> Vec3 {
     )
 }
 
-const CASES: [(f32, f32, bool); 4] = [
-    (1.5, 0.2, false),
-    (1.0 / 1.5, 0.3, false),
-    (1.33, 0.4, true),
-    (1.0 / 1.7, 0.15, true),
+/// (eta, (alpha_u, alpha_v), Beckmann).
+const CASES: [(f32, Vec2, bool); 6] = [
+    (1.5, Vec2::new(0.2, 0.2), false),
+    (1.0 / 1.5, Vec2::new(0.3, 0.3), false),
+    (1.33, Vec2::new(0.4, 0.4), true),
+    (1.0 / 1.7, Vec2::new(0.15, 0.15), true),
+    (1.5, Vec2::new(0.05, 0.4), false),
+    (1.0 / 1.33, Vec2::new(0.35, 0.1), true),
 ];
 
 #[test]
 fn sample_weights_are_eval_over_pdf() {
-    let n = Vec3::Z;
+    let n = Mat3::IDENTITY;
     let mut rng = Rng(7);
     for (eta, alpha, beckmann) in CASES {
         for theta in [0.1f32, 0.7, 1.2, 1.5] {
@@ -57,7 +60,7 @@ fn sample_weights_are_eval_over_pdf() {
                 let got = s.w;
                 assert!(
                     e.y > 0.0 && (got - expected).abs() <= 2e-3 * expected.max(1e-3),
-                    "eta {eta} alpha {alpha} beckmann {beckmann} theta {theta}: weight {got} vs f cos / pdf {expected} ({e})"
+                    "eta {eta} alpha {alpha:?} beckmann {beckmann} theta {theta}: weight {got} vs f cos / pdf {expected} ({e})"
                 );
             }
         }
@@ -66,7 +69,7 @@ fn sample_weights_are_eval_over_pdf() {
 
 #[test]
 fn eval_density_integrates_to_one() {
-    let n = Vec3::Z;
+    let n = Mat3::IDENTITY;
     for (eta, alpha, beckmann) in CASES {
         for theta in [0.2f32, 1.0] {
             let wo = direction(theta, 0.0);
@@ -87,7 +90,7 @@ fn eval_density_integrates_to_one() {
             // lands on the wrong side (and Beckmann's back-facing draws).
             assert!(
                 total <= 1.02 && total > 0.85,
-                "eta {eta} alpha {alpha} beckmann {beckmann} theta {theta}: {total}"
+                "eta {eta} alpha {alpha:?} beckmann {beckmann} theta {theta}: {total}"
             );
         }
     }

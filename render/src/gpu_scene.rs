@@ -93,8 +93,8 @@ impl GpuScene {
                 // An anisotropic principled BSDF turns with dp/du; textured parameters are
                 // read at (u, v).
                 || matches!(m.bsdf, cohort_scenes::Bsdf::Principled(p) if p.reads_tex_coords())
-                // The same for a rough conductor's roughness.
-                || matches!(m.bsdf, cohort_scenes::Bsdf::RoughConductor { alpha, .. } if !alpha.is_constant_isotropic())
+                // The same for a rough conductor's or rough dielectric's roughness.
+                || matches!(m.bsdf, cohort_scenes::Bsdf::RoughConductor { alpha, .. } | cohort_scenes::Bsdf::RoughDielectric { alpha, .. } if !alpha.is_constant_isotropic())
         });
         let tex_coords: Vec<glam::Vec4> = match (&scene.triangles.uvs, textured) {
             (Some(uvs), true) => uvs

@@ -385,6 +385,11 @@ fn rough_dielectric_bsdf_ggx() {
 }
 
 #[test]
+fn rough_dielectric_anisotropic_ggx_and_beckmann_with_a_textured_alpha() {
+    check("roughdielectric_anisotropic");
+}
+
+#[test]
 fn blend_bsdf_and_a_nested_blend() {
     check("blendbsdf");
 }
@@ -574,6 +579,19 @@ fn mesh_attributes_replaced_by_their_means_fail() {
 #[test]
 fn blend_bsdf_with_textured_weights() {
     check("blendbsdf_texture");
+}
+
+/// Only light samples reach this blend (a directional light, direct illumination): they
+/// must see its weighted sum, as Mitsuba evaluates it, or the choice of one BSDF shows as
+/// variance beyond Mitsuba's.
+#[test]
+fn blend_bsdf_under_a_delta_light_is_its_weighted_sum() {
+    check("blendbsdf_direct");
+}
+
+#[test]
+fn point_spot_and_area_lights_of_uneven_power_together() {
+    check("uneven_emitters");
 }
 
 #[test]

@@ -44,11 +44,12 @@ pub enum Bsdf {
         specular_reflectance: Vec3,
         nonlinear: bool,
     },
-    /// Mitsuba `roughdielectric`: a rough glass interface (isotropic GGX or Beckmann) of
-    /// relative index `eta` (int/ext) that reflects or refracts off sampled microfacets.
+    /// Mitsuba `roughdielectric`: a rough glass interface (GGX or Beckmann, anisotropic and
+    /// textured roughness as `roughconductor`'s) of relative index `eta` (int/ext) that
+    /// reflects or refracts off sampled microfacets.
     RoughDielectric {
         eta: f32,
-        alpha: f32,
+        alpha: Roughness,
         distribution: Microfacet,
         specular_reflectance: Vec3,
         specular_transmittance: Vec3,
@@ -445,7 +446,7 @@ impl Material {
                 if distribution == Microfacet::Beckmann {
                     flags |= GpuMaterial::FLAG_BECKMANN;
                 }
-                conductor_k = Vec3::new(alpha, 0.0, 0.0);
+                conductor_k = Vec3::new(alpha.u, 0.0, 0.0);
                 (
                     GpuMaterial::ROUGH_DIELECTRIC,
                     specular_reflectance,
@@ -516,7 +517,9 @@ impl Material {
         }
         let reads_uv = match self.bsdf {
             Bsdf::Principled(p) => p.textures.iter().any(Option::is_some),
-            Bsdf::RoughConductor { alpha, .. } => !alpha.is_constant_isotropic(),
+            Bsdf::RoughConductor { alpha, .. } | Bsdf::RoughDielectric { alpha, .. } => {
+                !alpha.is_constant_isotropic()
+            }
             _ => false,
         };
         if reads_uv {
@@ -563,7 +566,7 @@ impl Material {
 /// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
 /// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
 /// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
-/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); rough conductor with anisotropic or textured roughness: index + 1 of its block (`Roughness::gpu_block`); else 0 |
+/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); rough conductor or rough dielectric with anisotropic or textured roughness: index + 1 of its block (`Roughness::gpu_block`); else 0 |
 /// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
 /// | 80 | `blend_weight: f32` | that probability |
 /// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |

@@ -258,12 +258,16 @@ impl Scene {
 
     /// Material `m`'s parameter block in [`Scene::gpu_textures`] (`GpuMaterial::table` =
     /// its start + 1), if it has one: a principled BSDF's (`Principled::gpu_block`), or a
-    /// rough conductor's roughness where that is not one constant (`Roughness::gpu_block`).
+    /// rough conductor's or rough dielectric's roughness where that is not one constant
+    /// (`Roughness::gpu_block`).
     /// `starts`: where each texture's header starts.
     fn gpu_block(m: &crate::Material, starts: &[u32]) -> Vec<[f32; 4]> {
         match m.bsdf {
             crate::Bsdf::Principled(p) => p.gpu_block(starts).to_vec(),
-            crate::Bsdf::RoughConductor { alpha, .. } if !alpha.is_constant_isotropic() => {
+            crate::Bsdf::RoughConductor { alpha, .. }
+            | crate::Bsdf::RoughDielectric { alpha, .. }
+                if !alpha.is_constant_isotropic() =>
+            {
                 vec![alpha.gpu_block(starts)]
             }
             _ => Vec::new(),

@@ -272,6 +272,7 @@ fn unsupported_features_warn_with_file_and_line() {
         <bsdf type="diffuse"><float name="roughness" value="0.3"/></bsdf>
     </shape>
     <emitter type="sunsky"/>
+    <shape type="rectangle"><bsdf type="roughplastic"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
     <shape type="rectangle"><bsdf type="roughdielectric"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.1"/></bsdf></shape>
     <wibble/>"#,
     );
@@ -300,7 +301,17 @@ fn unsupported_features_warn_with_file_and_line() {
     warned_at(r#"type="pplastic""#, "bsdf 'pplastic' is not supported");
     warned_at("roughness", "'roughness'");
     warned_at("sunsky", "emitter 'sunsky' is not supported");
-    warned_at("roughdielectric", "anisotropic");
+    warned_at("roughplastic", "anisotropic");
+    // An anisotropic rough dielectric is rendered as it is, without a warning.
+    let rd = line_of(&xml, "roughdielectric");
+    assert!(!loaded
+        .warnings
+        .iter()
+        .any(|w| w.location.position == Position::Line(rd)));
+    assert!(loaded.scene.materials.iter().any(|m| matches!(
+        m.bsdf,
+        Bsdf::RoughDielectric { alpha, .. } if (alpha.u, alpha.v) == (0.3, 0.1)
+    )));
     warned_at("<wibble/>", "<wibble>");
     // The stand-in for pplastic keeps its colour.
     let s = &loaded.scene;

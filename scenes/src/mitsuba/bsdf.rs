@@ -192,7 +192,8 @@ fn alpha(ctx: &mut Ctx, obj: &Obj) -> Result<f32, SceneError> {
     Ok(alpha)
 }
 
-/// Microfacet roughness of a `roughconductor`: isotropic `alpha` (default 0.1) or
+/// Microfacet roughness of a `roughconductor` or `roughdielectric`: isotropic `alpha`
+/// (default 0.1) or
 /// `alpha_u` and `alpha_v` together, each a number or a texture read as a number (Mitsuba's
 /// `get_unbounded_texture` and `eval_1`).
 fn roughness<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<Roughness, SceneError> {
@@ -318,7 +319,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
         "dielectric" => dielectric(ctx, obj)?,
         "roughdielectric" => {
             let distribution = distribution(obj)?;
-            let alpha = alpha(ctx, obj)?;
+            let alpha = roughness(ctx, obj)?;
             let Bsdf::Dielectric {
                 int_ior,
                 ext_ior,
@@ -334,7 +335,7 @@ fn parse_uncached<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, Sce
                     "roughdielectric needs different int_ior and ext_ior (as in Mitsuba)",
                 ));
             }
-            if alpha == 0.0 {
+            if alpha.is_constant_isotropic() && alpha.u == 0.0 {
                 ctx.diag.warn(
                     obj.loc_of("alpha"),
                     "roughdielectric with alpha 0 rendered as a smooth dielectric",
