@@ -387,10 +387,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
             } else {
                 let t = tris[tri as usize];
-                // Mitsuba `blendbsdf`: one of its BSDFs scatters, the second (`blend`) with
-                // probability `blend_weight`, then alone, for shading, light sampling and MIS
-                // alike: in expectation the blend's weighted sum. A second BSDF that is a
-                // blend itself chooses again.
+                // Mitsuba `blendbsdf`: one of its BSDFs samples the next direction, the second
+                // (`blend`) with probability `blend_weight`; a second BSDF that is a blend
+                // itself chooses again. Light samples and MIS densities take the blend's
+                // weighted sum (`mixture`, below) where its BSDFs share the surface.
                 let root = materials[t.material as usize];
                 let mut m = root;
                 let mut level = 0u32;
@@ -575,15 +575,16 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         }
                         if light_pdf > 0.0 || delta_select > 0.0 {
                             // f·cos and the BSDF-sampling density of `wi`.
-                            let mut e = scatter_eval(
-                                textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
-                            );
-                            if mixture {
-                                e = blend_eval(
+                            let e = if mixture {
+                                blend_eval(
                                     materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
                                     front,
-                                );
-                            }
+                                )
+                            } else {
+                                scatter_eval(
+                                    textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
+                                )
+                            };
                             let fc = e.truncate();
                             let pdf_b = e.w;
                             // A normal or bump map weighs the direction (and zeroes its
