@@ -205,7 +205,8 @@ pub fn init_paths(
     idrays[g] = gi;
     state[g] = UVec4::new(pixel, f.first_path, 0, 0);
     ray_o[g] = Vec4::new(o.x, o.y, o.z, 0.0);
-    ray_d[g] = Vec4::new(d.x, d.y, d.z, 0.0);
+    // w: the path's accumulated eta² (1 for a camera ray; see `extend`'s roulette).
+    ray_d[g] = Vec4::new(d.x, d.y, d.z, 1.0);
     beta[g] = camera_beta(fs.w);
     radiance[g] = Vec4::ZERO;
     accum[g] = Vec4::ZERO;
@@ -334,6 +335,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // through an emitter that `hide_emitters` hides.
     let mut next_bounce = 0u32;
     let mut thr = Vec3::ZERO;
+    // The product of eta² over the path's refractions (`ray_d`'s w): refractions scale
+    // the throughput by 1 / eta², as Mitsuba's radiance transport does, and Mitsuba's
+    // roulette weighs the throughput times this product, so that a path is not ended
+    // for the brightness it lost entering glass.
+    let mut eta2 = 1.0f32;
     let mut l = Vec3::ZERO;
     let mut new_o = Vec3::ZERO;
     let mut new_d = Vec3::ZERO;
@@ -365,6 +371,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             let tri = h.w.to_bits();
             let d4 = ray_d[r];
             let d = d4.truncate();
+            eta2 = d4.w;
             let b4 = beta[r];
             thr = b4.truncate();
             let r4 = radiance[r];
@@ -743,6 +750,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         if e.w > 0.0 {
                             new_d = (fr * wl).normalize();
                             thr = thr * e.truncate() / e.w;
+                            // A refraction through `principled` (its value carries the
+                            // 1 / eta²); `principledthin` stays on its side of the index.
+                            if m.kind == PRINCIPLED && wi_l.z * wl.z < 0.0 {
+                                let eta_path = if wi_l.z > 0.0 { pp.eta } else { 1.0 / pp.eta };
+                                eta2 *= eta_path * eta_path;
+                            }
                             alive = true;
                             bsdf_pdf = e.w;
                             env_pdf = environment_pdf(f, textures, n, new_d);
@@ -766,12 +779,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     );
                     if s.w > 0.0 {
                         new_d = s.truncate();
-                        // No 1 / eta² on refraction (as for the smooth dielectric): it
-                        // cancels over a path that enters and leaves, and without it the
-                        // roulette sees Mitsuba's throughput x eta².
+                        // The weight carries a refraction's 1 / eta²
+                        // (`rough_dielectric::sample`).
                         let mut tint = m.color;
                         if new_d.dot(n) <= 0.0 {
                             tint = m.transmittance;
+                            eta2 *= eta_rd * eta_rd;
                         }
                         thr = thr * tint * s.w;
                         alive = true;
@@ -791,7 +804,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         let inv = 1.0 / eta;
                         let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
                         new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
-                        thr = thr * m.transmittance;
+                        // Mitsuba's radiance scale of a refraction.
+                        thr = thr * m.transmittance * (inv * inv);
+                        eta2 *= eta * eta;
                     }
                     alive = true;
                 }
@@ -838,7 +853,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if f.roulette_throughput != 0 {
                         // |throughput|: a reconstruction filter's negative lobes make
                         // it negative (`film_sample`).
-                        q = thr.abs().max_element().min(0.95);
+                        q = (thr.abs().max_element() * eta2).min(0.95);
                     }
                     if rr_u < q {
                         thr = thr / q;
@@ -866,7 +881,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         if alive {
             state[r] = UVec4::new(pixel, path, next_bounce, 0);
             ray_o[r] = new_o.extend(0.0);
-            ray_d[r] = new_d.extend(0.0);
+            ray_d[r] = new_d.extend(eta2);
             beta[r] = thr.extend(bsdf_pdf);
             radiance[r] = l.extend(env_pdf);
             flags[i] = 1;
@@ -892,7 +907,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             let lens = lens_offset(f, key);
             state[r] = UVec4::new(pixel, next, 0, done);
             ray_o[r] = camera_origin(f, film, lens).extend(0.0);
-            ray_d[r] = camera_dir(f, film, lens).extend(0.0);
+            ray_d[r] = camera_dir(f, film, lens).extend(1.0);
             beta[r] = camera_beta(fs.w);
             flags[i] = 0;
         }

@@ -10,7 +10,8 @@
 //! factor of the half vector. So the warps are Mitsuba's too: its GGX visible-normal
 //! sampling (`sample_visible_11`) and its concentric cosine hemisphere.
 //!
-//! Transmission omits Mitsuba's radiance scale 1 / eta², as `rough_dielectric` does.
+//! Transmission scales radiance by 1 / eta², as Mitsuba's radiance transport and
+//! `rough_dielectric` do.
 
 use crate::layout::*;
 use crate::microfacet::{ggx_d, ggx_g1, visible_pdf, visible_sample};
@@ -358,7 +359,9 @@ pub fn eval(p: Principled, wi: Vec3, wo: Vec3) -> Vec4 {
         }
         if p.spec_trans != 0.0 && bsdf > 0.0 && refract_ok && f < 1.0 {
             let den = cih + eta_path * coh;
-            let t = (1.0 - f) * d * g * eta_path * eta_path * cih * coh / (ci * den * den);
+            // Mitsuba's radiance scale 1 / eta_path² cancels the eta_path² of the
+            // transmission term.
+            let t = (1.0 - f) * d * g * cih * coh / (ci * den * den);
             let b = p.base_color;
             value += Vec3::new(b.x.sqrt(), b.y.sqrt(), b.z.sqrt()) * (bsdf * t.abs());
         }

@@ -37,9 +37,9 @@ pub fn frame(
 /// side's over the near side's), roughness `a`: xyz = the new direction (world space), w =
 /// its weight without the reflectance / transmittance tint (0 when the sample is invalid:
 /// a microfacet facing away, or a direction on the wrong side).
-/// Radiance is not scaled by 1 / eta² on refraction (Mitsuba's importance transport, as
-/// the smooth dielectric): the factors of entering and leaving cancel, and the throughput
-/// then reads as Mitsuba's path integrator weighs it for Russian roulette.
+/// A refraction scales radiance by 1 / eta², as Mitsuba's radiance transport does
+/// (the ray's solid angle widens or narrows across the interface); the path's Russian
+/// roulette undoes it with the accumulated eta² (`extend`).
 /// `u` picks the normal, `choice` reflection (below the Fresnel reflectance) or refraction.
 #[kernel_fn]
 pub fn sample(wo: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool, u: Vec2, choice: f32) -> Vec4 {
@@ -52,6 +52,7 @@ pub fn sample(wo: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool, u: Vec2, ch
             let f = fresnel_dielectric(cos_om, eta);
             let i: Vec3;
             let valid: bool;
+            let mut scale = 1.0f32;
             if choice < f {
                 i = m * (2.0 * cos_om) - o;
                 valid = i.z > 0.0;
@@ -60,11 +61,12 @@ pub fn sample(wo: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool, u: Vec2, ch
                 let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
                 i = m * (cos_om / eta - cos_t) - o / eta;
                 valid = i.z < 0.0;
+                scale = 1.0 / (eta * eta);
             }
             if valid {
                 // Visible normals drawn, reflection or refraction chosen by the Fresnel
                 // term: what remains is the masking of the new direction.
-                let w = g1(i, m, a, beckmann);
+                let w = g1(i, m, a, beckmann) * scale;
                 r = (fr * i).normalize().extend(w);
             }
         }
@@ -76,8 +78,8 @@ pub fn sample(wo: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool, u: Vec2, ch
 /// surface, world space; the frame `fr`'s z faces the viewer): x = f·|cos| without the
 /// tint (which is the specular reflectance where z = 1, reflection, else the specular
 /// transmittance), y = the density with which [`sample`] produces `wi`, z = 1 for
-/// reflection. Mitsuba's `roughdielectric` `eval` and `pdf` without the radiance scale (see
-/// [`sample`]).
+/// reflection. Mitsuba's `roughdielectric` `eval` and `pdf`, the radiance scale 1 / eta²
+/// of a refraction included (see [`sample`]).
 #[kernel_fn]
 pub fn eval(wo: Vec3, wi: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool) -> Vec4 {
     let o = fr.transpose() * wo;
@@ -104,7 +106,7 @@ pub fn eval(wo: Vec3, wi: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool) -> 
                 let denom = om + eta * im;
                 let jacobian = (eta * eta * im / (denom * denom)).abs();
                 r = Vec4::new(
-                    ((1.0 - f) * dm * g * eta * eta * om * im / (o.z * denom * denom)).abs(),
+                    ((1.0 - f) * dm * g * om * im / (o.z * denom * denom)).abs(),
                     pm * (1.0 - f) * jacobian,
                     0.0,
                     0.0,

@@ -51,19 +51,6 @@ fn sets() -> Vec<Set> {
     sets
 }
 
-/// The kernels leave out Mitsuba's radiance scale 1 / eta² on refraction through
-/// `principled` (as through every dielectric: `cohort_kernels::rough_dielectric`), so its
-/// transmitted values are Mitsuba's times eta² (of the side the viewer is on).
-fn radiance_scale(s: &Set, wi: Vec3, wo: Vec3) -> f32 {
-    if s.thin || wi.z * wo.z >= 0.0 {
-        1.0
-    } else if wi.z > 0.0 {
-        s.p.eta * s.p.eta
-    } else {
-        1.0 / (s.p.eta * s.p.eta)
-    }
-}
-
 fn v3(c: &[f32], at: usize) -> Vec3 {
     Vec3::new(c[at], c[at + 1], c[at + 2])
 }
@@ -85,7 +72,7 @@ fn values_and_densities_are_mitsubas() {
             } else {
                 eval(s.p, wi, wo)
             };
-            let (value, pdf) = (v3(c, 6) * radiance_scale(s, wi, wo), c[9]);
+            let (value, pdf) = (v3(c, 6), c[9]);
             let ok = close(e.x, value.x) && close(e.y, value.y) && close(e.z, value.z);
             assert!(
                 ok,
@@ -113,7 +100,7 @@ fn samples_are_mitsubas() {
             let wi = v3(c, 0);
             let (choice, u) = (c[10], Vec2::new(c[11], c[12]));
             let want = v3(c, 13);
-            let weight = v3(c, 16) * radiance_scale(s, wi, want);
+            let weight = v3(c, 16);
             let wo = if s.thin {
                 thin_sample(s.p, wi, u, choice)
             } else {
