@@ -22,8 +22,8 @@ use crate::sampling::{
     plastic_base, plastic_specular_probability, DiffuseSampler,
 };
 use crate::scatter::{
-    blend_eval, blend_traits, blend_weight, scatter_eval, BLEND_LEVELS, BLEND_NOT_PLAIN,
-    BLEND_READS_UV,
+    blend_eval, blend_traits, blend_weight, scatter_eval, BLEND_LEVELS, BLEND_NONE,
+    BLEND_NOT_PLAIN, BLEND_READS_UV,
 };
 use crate::texture::{hit_uv, luminance, texture_at_hit};
 use cohort::prelude::*;
@@ -401,12 +401,18 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let root = materials[t.material as usize];
                 let mut m = root;
                 let mut level = 0u32;
+                // The blend level of the BSDF chosen, and the probability of that choice.
+                let mut picked = 0u32;
+                let mut pick_p = 1.0f32;
                 while level < BLEND_LEVELS && m.blend != 0 {
                     let weight = blend_weight(textures, tex_coords, m, t, h);
                     if uniform(key, 10 + level) < weight {
                         m = materials[(m.blend - 1) as usize];
                         level += 1;
+                        picked = level;
+                        pick_p *= weight;
                     } else {
+                        pick_p *= 1.0 - weight;
                         level = BLEND_LEVELS;
                     }
                 }
@@ -585,7 +591,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             let e = if mixture {
                                 blend_eval(
                                     materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
-                                    front,
+                                    front, BLEND_NONE,
                                 )
                             } else {
                                 scatter_eval(
@@ -633,6 +639,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         }
                     }
                 }
+                // The throughput before this vertex's BSDF weighs it, and the probability
+                // with which the BSDF chose the delta lobe it sampled (0: none), for a
+                // blend's delta directions (below).
+                let thr_in = thr;
+                let mut delta_p = 0.0f32;
                 if pass_through {
                     // The camera ray goes on behind the hidden emitter, still a camera ray.
                     new_d = d;
@@ -663,6 +674,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if uniform(key, 4) < p_spec {
                         new_d = d + n * (2.0 * cos_i);
                         thr = thr * m.transmittance * (f_i / p_spec);
+                        delta_p = p_spec;
                     } else {
                         let s = S::sample(n, u, shared_patch, f.patches_n);
                         new_d = s.truncate();
@@ -718,6 +730,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     new_d = d + n * (2.0 * cos_i);
                     thr = thr * albedo * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
                     alive = true;
+                    delta_p = 1.0;
                 } else if glossy {
                     let fr = crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
                     let a = crate::rough_conductor::alpha(textures, m, uv, t.original, h);
@@ -800,6 +813,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     if uniform(key, 4) < fr {
                         new_d = d + n * (2.0 * cos_i);
                         thr = thr * m.color;
+                        delta_p = fr;
                     } else {
                         let inv = 1.0 / eta;
                         let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
@@ -807,14 +821,27 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         // Mitsuba's radiance scale of a refraction.
                         thr = thr * m.transmittance * (inv * inv);
                         eta2 *= eta * eta;
+                        delta_p = 1.0 - fr;
                     }
                     alive = true;
+                }
+                // A delta direction drawn in a blend takes Mitsuba's weight: the drawing
+                // BSDF's delta value and lobe probability, the other BSDFs' value and
+                // density there (`crate::scatter`). It stays a delta bounce for MIS.
+                if mixture && alive && delta_p > 0.0 {
+                    let rest = blend_eval(
+                        materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
+                        picked,
+                    );
+                    let own = pick_p * delta_p;
+                    thr = (thr * own + thr_in * rest.truncate()) / (own + rest.w);
                 }
                 // A blend's sampled direction, drawn by one of its BSDFs, is weighed against
                 // light sampling by the blend's density (delta directions keep 0).
                 if mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through {
                     bsdf_pdf = blend_eval(
                         materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
+                        BLEND_NONE,
                     )
                     .w;
                 }

@@ -8,6 +8,14 @@
 //! for sampling, as Mitsuba does; light sampling and the MIS density of the sampled
 //! direction take the mixture ([`blend_eval`]), so that a light sample sees the blend's
 //! value, not one of its BSDFs' (whose choice would add variance Mitsuba's image lacks).
+//!
+//! A delta lobe in a blend: Mitsuba 3.9's `sample` weighs a delta direction drawn by one
+//! BSDF by the blend's value over its density there, where the drawing BSDF adds its
+//! delta value and lobe probability and the others their `eval` and `pdf` (the drawing
+//! BSDF's own non-delta lobes are left out). That is not the blend's expectation (the
+//! other BSDFs' densities, a different measure, dilute the delta lobe), but it is
+//! Mitsuba's image, so `extend` reproduces it with [`blend_eval`] leaving the drawing
+//! BSDF out (checked against the `mitsuba` package: reference scene `blendbsdf_delta`).
 
 use crate::layout::*;
 use crate::sampling::{
@@ -18,6 +26,8 @@ use cohort::prelude::*;
 
 /// Blends nested deeper than this take their last BSDF as it is (as `extend`'s choice does).
 pub const BLEND_LEVELS: u32 = 4;
+/// [`blend_eval`]'s `skip` that leaves no BSDF out.
+pub const BLEND_NONE: u32 = BLEND_LEVELS + 1;
 
 /// The weight of a blend material `m`'s second BSDF at the hit: its number, or the
 /// luminance of its texture, clamped to [0, 1] (Mitsuba's `eval_weight`).
@@ -151,7 +161,8 @@ pub fn scatter_eval(
 
 /// [`scatter_eval`] of a blend: the sum over its BSDFs, each weighted by the probability
 /// that `extend`'s choice reaches it (the first BSDF of blend level k: the product of the
-/// weights above it times one minus its own).
+/// weights above it times one minus its own), leaving out the BSDF of level `skip`
+/// ([`BLEND_NONE`]: none).
 #[kernel_fn]
 pub fn blend_eval(
     materials: &[Material],
@@ -166,6 +177,7 @@ pub fn blend_eval(
     n: Vec3,
     ng: Vec3,
     front: bool,
+    skip: u32,
 ) -> Vec4 {
     let mut m = root;
     let mut reach = 1.0f32;
@@ -178,7 +190,7 @@ pub fn blend_eval(
             w = blend_weight(textures, tex_coords, m, t, h);
         }
         let p = reach * (1.0 - w);
-        if p > 0.0 {
+        if p > 0.0 && level != skip {
             let mut albedo = m.color;
             if m.texture != 0 {
                 albedo = texture_at_hit(textures, m.texture - 1, uv, t.original, h);

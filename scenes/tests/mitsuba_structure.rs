@@ -956,7 +956,7 @@ fn conductor_materials_and_distributions() {
 /// Mitsuba `blendbsdf`: the first BSDF is the material, the second its own material chosen
 /// with probability `weight` (a nested blend second chooses again; one nested first is
 /// moved second with weight 1 - w); a missing weight or a wrong number of BSDFs is an
-/// error at the blend; a smooth (delta) BSDF in a blend warns.
+/// error at the blend; a smooth (delta) BSDF in a blend warns only beside a masked BSDF.
 #[test]
 fn blend_bsdfs_become_chained_materials() {
     let diffuse =
@@ -1027,19 +1027,23 @@ fn blend_bsdfs_become_chained_materials() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("exactly two nested BSDFs, not 1"), "{e}");
-    let delta = format!(
-        r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/>{}<bsdf type="conductor"/></bsdf>"#,
-        diffuse(0.2)
-    );
-    let loaded = cohort_scenes::load_mitsuba_str(&xml(delta), ".").unwrap();
-    assert!(
+    // A delta BSDF in a blend is weighed as Mitsuba weighs it: no warning; with a masked
+    // BSDF beside it, it is not, and the loader says so.
+    let delta_warns = |other: String| {
+        let blend = format!(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/>{other}<bsdf type="conductor"/></bsdf>"#
+        );
+        let loaded = cohort_scenes::load_mitsuba_str(&xml(blend), ".").unwrap();
         loaded
             .warnings
             .iter()
-            .any(|w| w.message.contains("smooth (delta) BSDF")),
-        "{:?}",
-        loaded.warnings
-    );
+            .any(|w| w.message.contains("smooth (delta) BSDF"))
+    };
+    assert!(!delta_warns(diffuse(0.2)));
+    assert!(delta_warns(format!(
+        r#"<bsdf type="mask"><float name="opacity" value="0.5"/>{}</bsdf>"#,
+        diffuse(0.2)
+    )));
 }
 
 /// A rough conductor's roughness as Mitsuba reads it: `alpha_u` and `alpha_v` together

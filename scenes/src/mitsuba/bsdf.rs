@@ -618,18 +618,31 @@ fn blend<'a>(ctx: &mut Ctx<'a>, obj: &'a Obj) -> Result<ParsedBsdf, SceneError> 
         (Some(_), None) => (*second, *first, 1.0 - weight),
         _ => (*first, *second, weight),
     };
-    let delta = |b: &ParsedBsdf| {
+    // The kernels weigh a delta direction drawn in a blend as Mitsuba does only where every
+    // BSDF of the blend shares the surface (`cohort_kernels::scatter`); with a mask or a
+    // normal or bump map in it, each hit takes the BSDF it picks for everything.
+    let mut chain = vec![&first, &second];
+    let mut next = second.blend.map(|b| b.2);
+    while let Some(i) = next {
+        let part = &ctx.blend_parts[i as usize];
+        chain.push(part);
+        next = part.blend.map(|b| b.2);
+    }
+    let delta = chain.iter().any(|b| {
         matches!(
             b.bsdf,
             Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::Plastic { .. }
         )
-    };
-    if delta(&first) || delta(&second) {
+    });
+    let not_plain = chain
+        .iter()
+        .any(|b| b.mask.is_some() || b.perturb.is_some());
+    if delta && not_plain {
         ctx.diag.warn(
             &obj.loc,
-            "blendbsdf of a smooth (delta) BSDF: rendered as the exact weighted sum, which \
-             Mitsuba's image differs from (its blend mixes the delta BSDF's sampling \
-             probability with the other BSDF's density)",
+            "blendbsdf of a smooth (delta) BSDF and a masked or normal- or bump-mapped one: \
+             each hit uses the BSDF it picks, so delta directions get the exact weighted sum, \
+             where Mitsuba weighs them by the blend's density and its image differs",
         );
     }
     obj.finish(&mut ctx.diag)?;
