@@ -422,7 +422,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 if root.blend != 0 {
                     traits = blend_traits(materials, root);
                 }
-                let mixture = I::NEE && root.blend != 0 && traits & BLEND_NOT_PLAIN == 0;
+                let plain_blend = root.blend != 0 && traits & BLEND_NOT_PLAIN == 0;
+                let mixture = I::NEE && plain_blend;
                 // A hit on a (numerically) degenerate triangle has no normal: shade it as
                 // facing the ray rather than let a NaN normal into the next ray.
                 let cr = (t.v1 - t.v0).cross(t.v2 - t.v0);
@@ -455,7 +456,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // texture's here.
                 let mut uv = Vec2::ZERO;
                 if m.texture != 0
-                    || (mixture && traits & BLEND_READS_UV != 0)
+                    || (plain_blend && traits & BLEND_READS_UV != 0)
                     || m.opacity_texture != 0
                     || m.perturb_texture != 0
                     || m.flags & READS_UV != 0
@@ -828,7 +829,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // A delta direction drawn in a blend takes Mitsuba's weight: the drawing
                 // BSDF's delta value and lobe probability, the other BSDFs' value and
                 // density there (`crate::scatter`). It stays a delta bounce for MIS.
-                if mixture && alive && delta_p > 0.0 {
+                // (With or without light sampling: it is the BSDF's weight, not a density.)
+                if plain_blend && alive && delta_p > 0.0 {
                     let rest = blend_eval(
                         materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
                         picked,
