@@ -9,15 +9,16 @@ use std::time::Duration;
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
 use cohort_render::provenance::Provenance;
-use cohort_render::{
-    output, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Renderer, Roulette, Shard,
-};
+use cohort_render::{output, Budget, RenderOptions, Renderer, Shard};
 use cohort_scenes::embedded;
+use options::Config;
 
 mod compare;
 mod devices;
 mod figures;
 mod merge;
+mod options;
+mod view;
 
 #[derive(Parser)]
 #[command(
@@ -46,6 +47,9 @@ enum Command {
     Compare(compare::CompareArgs),
     /// List the usable devices of each backend, by the index `--devices` takes.
     Devices,
+    /// Watch a scene render progressively in a window: move the camera, switch the
+    /// configuration live, compare two side by side (README, "The viewer").
+    View(view::ViewArgs),
 }
 
 #[derive(clap::Args)]
@@ -180,6 +184,7 @@ fn main() -> ExitCode {
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Devices => devices::list(),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -215,68 +220,87 @@ fn load_scene(
     ))
 }
 
+impl RenderArgs {
+    /// The configuration options, by name (shared with `cohort view`).
+    fn config(&self) -> Config {
+        Config {
+            algorithm: self.algorithm.clone(),
+            n: self.n,
+            in_patch: self.in_patch.clone(),
+            rr: self.rr.clone(),
+            roulette: self.roulette.clone(),
+            end_continue: self.end_continue,
+            interleave: self.interleave,
+            coherent_glossy: self.coherent_glossy,
+            compact: self.compact,
+            integrator: self.integrator.clone(),
+            coherent_light: self.coherent_light,
+            light_cells: self.light_cells,
+            seed: self.seed,
+        }
+    }
+
+    /// The budget the options ask for (`None`: the scene's default).
+    fn budget(&self) -> Result<Option<Budget>, String> {
+        Ok(match (self.paths, self.time) {
+            (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
+                return Err(format!("--time {t} must be a positive number of seconds"))
+            }
+            (_, Some(t)) => Some(Budget::KernelTime(Duration::from_secs_f64(t))),
+            (Some(0), _) => return Err("--paths must be at least 1".into()),
+            (Some(p), None) => Some(Budget::PathsPerPixel(p)),
+            (None, None) => None,
+        })
+    }
+
+    fn is_embedded_scene(&self) -> bool {
+        embedded::names().contains(&self.scene.as_str())
+    }
+
+    /// The scene the options name, loaded with their `-D` and `--lenient`.
+    fn load_scene(&self) -> Result<cohort_scenes::Scene, String> {
+        load_scene(
+            &self.scene,
+            &cohort_scenes::LoadOptions {
+                params: self.define.clone(),
+                lenient: self.lenient,
+            },
+        )
+    }
+
+    /// `--width` / `--height` (one alone keeps the scene's other side).
+    fn size(&self, scene: &cohort_scenes::Scene) -> Option<(u32, u32)> {
+        match (self.width, self.height) {
+            (None, None) => None,
+            (w, h) => Some((
+                w.unwrap_or(scene.camera.width),
+                h.unwrap_or(scene.camera.height),
+            )),
+        }
+    }
+}
+
 fn render(a: RenderArgs) -> Result<(), String> {
     let process_start = std::time::Instant::now();
-    let algorithm = Algorithm::parse(&a.algorithm)
-        .ok_or_else(|| format!("unknown algorithm `{}` (available: normal, warp, block_256, block_512, block_1024, grid)", a.algorithm))?;
-    let in_patch = match a.in_patch.as_str() {
-        "uniform" => InPatch::Uniform,
-        "cosine" => InPatch::Cosine,
-        "equal-area" => InPatch::EqualArea,
-        other => {
-            return Err(format!(
-                "unknown --in-patch `{other}` (uniform, cosine or equal-area)"
-            ))
-        }
-    };
-    let (group_rr, whole_group_end) = match a.rr.as_str() {
-        "path" => (false, None),
-        "group" => (true, None),
-        "whole" => (true, Some(a.end_continue)),
-        other => return Err(format!("unknown --rr `{other}` (path, group or whole)")),
-    };
-    let roulette = match a.roulette.as_str() {
-        "auto" if a.rr == "path" && !embedded::names().contains(&a.scene.as_str()) => {
-            Roulette::Mitsuba
-        }
-        "auto" => Roulette::Fixed,
-        other => Roulette::parse(other)
-            .ok_or_else(|| format!("unknown --roulette `{other}` (auto, fixed or mitsuba)"))?,
-    };
-    let integrator = IntegratorKind::parse(&a.integrator)
-        .ok_or_else(|| format!("unknown --integrator `{}` (nee or path)", a.integrator))?;
-    let budget = match (a.paths, a.time) {
-        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
-            return Err(format!("--time {t} must be a positive number of seconds"))
-        }
-        (_, Some(t)) => Some(Budget::KernelTime(Duration::from_secs_f64(t))),
-        (Some(0), _) => return Err("--paths must be at least 1".into()),
-        (Some(p), None) => Some(Budget::PathsPerPixel(p)),
-        (None, None) => None,
-    };
-    let scene = load_scene(
-        &a.scene,
-        &cohort_scenes::LoadOptions {
-            params: a.define.clone(),
-            lenient: a.lenient,
-        },
-    )?;
+    let config = a.config();
+    let configured = config.options(a.is_embedded_scene())?;
+    let RenderOptions {
+        algorithm,
+        group_rr,
+        whole_group_end,
+        integrator,
+        ..
+    } = configured;
+    let budget = a.budget()?;
+    let scene = a.load_scene()?;
     let scene_loaded = process_start.elapsed();
     // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
-    let budget = budget.unwrap_or(Budget::PathsPerPixel(
-        if embedded::names().contains(&a.scene.as_str()) {
-            64
-        } else {
-            scene.sample_count.max(1)
-        },
-    ));
-    let size = match (a.width, a.height) {
-        (None, None) => None,
-        (w, h) => Some((
-            w.unwrap_or(scene.camera.width),
-            h.unwrap_or(scene.camera.height),
-        )),
-    };
+    let budget = budget.unwrap_or(Budget::PathsPerPixel(if a.is_embedded_scene() {
+        64
+    } else {
+        scene.sample_count.max(1)
+    }));
+    let size = a.size(&scene);
     let shard = match &a.shard {
         Some(s) => Shard::parse(s).map_err(|e| format!("--shard: {e}"))?,
         None => Shard::WHOLE,
@@ -285,23 +309,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let device_opened = process_start.elapsed();
     let info = devices[0].info().clone();
     let opts = RenderOptions {
-        algorithm,
-        in_patch,
-        patches_n: a.n,
-        group_rr,
-        interleave: a.interleave,
-        coherent_glossy: a.coherent_glossy,
         budget,
-        seed: a.seed,
         size,
-        compact: a.compact,
-        whole_group_end,
-        integrator,
-        roulette,
-        coherent_light: a.coherent_light,
-        light_cells: a.light_cells,
         shard,
-        ..Default::default()
+        ..configured
     };
     for w in cohort_render::roulette::warnings(&scene, &opts) {
         eprintln!("warning: {w}");
@@ -407,26 +418,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             provenance.merge
         );
     }
-    let config = format!(
-        "{}{}{}, N = {}, in-patch {}, D = {}, integrator {}{}",
-        algorithm.name(),
-        match (group_rr, whole_group_end) {
-            (_, Some(q)) => format!("_rr, whole-group end (q = {q})"),
-            (true, None) => "_rr".into(),
-            (false, None) => String::new(),
-        },
-        if a.compact { "" } else { " (NO)" },
-        a.n,
-        a.in_patch,
-        a.interleave,
-        integrator.name(),
-        if a.coherent_light {
-            format!(", coherent light (K = {})", a.light_cells)
-        } else {
-            String::new()
-        }
-    );
-    println!("algorithm      {config}");
+    println!("algorithm      {}", config.label());
     println!(
         "paths/pixel    {:.2} ({} paths, {} iterations)",
         stats.paths_per_pixel(),

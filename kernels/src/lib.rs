@@ -8,6 +8,7 @@
 //! with next-event estimation `trace_shadow*` (occlusion of each vertex's light sample;
 //! adds it, and the estimate of each ended path to its pixel) →
 //! `compact_*` (stable partition of `idrays`: extended rays first, regenerated last).
+//! A viewer (`cohort view`) runs `display` between iterations: the accumulation, tone-mapped.
 //! Path state lives in structure-of-arrays buffers indexed by ray slot; slot `g` belongs
 //! to pixel `slot_pixel[g]` (Morton order), and only `idrays` is ever reordered.
 // Kernel source is Rust the macro lowers to shaders: a kernel's parameters are its bindings
@@ -17,6 +18,7 @@
 
 pub mod compact;
 pub mod copy;
+pub mod display;
 pub mod environment;
 pub mod extend;
 pub mod integrator;

@@ -92,14 +92,10 @@ pub fn write_exr(
     })
 }
 
+/// The sRGB encoding of `display`, the viewer's kernel, run here as the Rust it is: the
+/// PNG and the viewer round every pixel alike.
 fn srgb(linear: f32) -> u8 {
-    let c = linear.clamp(0.0, 1.0);
-    let s = if c <= 0.0031308 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
+    cohort_kernels::display::srgb8(linear) as u8
 }
 
 /// Tone-maps with exposure `2^stops` and clamping, then encodes sRGB.

@@ -15,6 +15,7 @@ use cohort::runtime::{
 };
 use cohort::Group;
 use cohort_kernels::compact;
+use cohort_kernels::display::{display, DisplayParams};
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::layout::Frame;
@@ -24,7 +25,7 @@ use cohort_kernels::sampling::{
 };
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
-use cohort_scenes::{morton_pixel_order, Scene};
+use cohort_scenes::{morton_pixel_order, Camera, Scene};
 use glam::{UVec4, Vec3, Vec4};
 
 use crate::{GpuScene, Image, Shard};
@@ -159,6 +160,12 @@ impl RenderOptions {
     /// independent diffuse sampling, per-path roulette and independent light samples.
     /// Then the shards of a paths budget merge into the unsplit run's image; otherwise
     /// group draws keyed by iteration enter, and the merge is statistical.
+    /// Whether a renderer of a `width` x `height` image takes these options; the error
+    /// says what is wrong (what `Renderer::new` and `reconfigure` would return).
+    pub fn check(&self, width: u32, height: u32) -> Result<(), RenderError> {
+        validate(self, width, height)
+    }
+
     pub fn per_path_sampling(&self) -> bool {
         !self.algorithm.coherent
             && !self.group_rr
@@ -335,6 +342,8 @@ pub struct Renderer<'d> {
     paths: Paths,
     slot_to_pixel: Vec<u32>,
     opts: RenderOptions,
+    /// The camera at the rendered size (the scene's, until `set_camera`).
+    camera: Camera,
     /// The run in progress: `None` until `start`.
     run: Option<Run>,
     startup: Startup,
@@ -411,20 +420,12 @@ impl<'d> Renderer<'d> {
             )));
         }
         validate(&opts, w, h)?;
-        let f = camera.frame();
         let (max_depth, zero_depth) = crate::roulette::depth_fields(scene);
         let (rr_depth, roulette_throughput) = opts.roulette.frame_fields(scene);
         let mut frame = Frame {
-            cam_origin: f.origin,
             width: w,
-            cam_forward: f.forward,
             height: h,
-            cam_right: f.right,
             slots: n as u32,
-            cam_up: f.up,
-            orthographic: f.orthographic as u32,
-            lens_radius: f.lens_radius,
-            focus_distance: f.focus_distance,
             shading_normals: gpu.has_shading_normals as u32,
             filter_radius: camera.filter.map_or(0.0, |f| f.radius),
             filter_border: camera.filter.map_or(0, |f| f.border()),
@@ -441,6 +442,7 @@ impl<'d> Renderer<'d> {
             env_map: gpu.env_map,
             ..Default::default()
         };
+        apply_camera(&mut frame, &camera);
         apply_options(&mut frame, &opts);
         let allocated = Instant::now();
         let n = n as usize;
@@ -481,6 +483,7 @@ impl<'d> Renderer<'d> {
             paths,
             slot_to_pixel,
             opts,
+            camera,
             run: None,
             startup,
         };
@@ -536,6 +539,69 @@ impl<'d> Renderer<'d> {
 
     pub fn size(&self) -> (u32, u32) {
         (self.frame.width, self.frame.height)
+    }
+
+    /// The options of the next (or current) run.
+    pub fn options(&self) -> &RenderOptions {
+        &self.opts
+    }
+
+    /// The camera rays start from, at the rendered size.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Moves the camera (an interactive viewer does, on every mouse drag): the next run
+    /// starts from the new view, and a run in progress is dropped, since its image
+    /// belongs to the old one. The image size stays (a different size is an error).
+    pub fn set_camera(&mut self, camera: Camera) -> Result<(), RenderError> {
+        let (w, h) = self.size();
+        if (camera.width, camera.height) != (w, h) {
+            return Err(RenderError::Options(format!(
+                "set_camera cannot change the image size {w}x{h} to {}x{}",
+                camera.width, camera.height
+            )));
+        }
+        apply_camera(&mut self.frame, &camera);
+        self.camera = camera;
+        self.run = None;
+        Ok(())
+    }
+
+    /// The paper's `display` kernel: tone-maps the current estimate (exposure `2^stops`,
+    /// sRGB, as `output::write_png`) into `out`, `0x00RRGGBB` per pixel, row-major,
+    /// writing only the image columns in `columns` (two renderers of one size can share
+    /// `out` side by side). Runs on the renderer's device, after the iterations an
+    /// `advance` submitted; returns the dispatch's statistics (its GPU time).
+    pub fn display(
+        &self,
+        out: &GpuBuffer<u32>,
+        stops: f32,
+        columns: std::ops::Range<u32>,
+    ) -> Result<DispatchStats, RenderError> {
+        let (w, h) = self.size();
+        if out.len() < (w as usize) * (h as usize) {
+            return Err(RenderError::Options(format!(
+                "display needs {} pixels of output, the buffer has {}",
+                w as usize * h as usize,
+                out.len()
+            )));
+        }
+        let params = DisplayParams {
+            slots: self.frame.slots,
+            width: w,
+            x_begin: columns.start,
+            x_end: columns.end.min(w),
+            scale: 2f32.powf(stops),
+        };
+        Ok(display::launch(
+            self.device,
+            self.frame.slots,
+            &params,
+            &self.paths.slot_pixel,
+            &self.paths.accum,
+            out,
+        )?)
     }
 
     /// Renders until the budget is spent. `progress` receives the fraction done.
@@ -1094,6 +1160,18 @@ fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
 }
 
 /// Writes the options into the frame the kernels read.
+/// The camera fields of the frame: where rays start and how they spread.
+fn apply_camera(frame: &mut Frame, camera: &Camera) {
+    let f = camera.frame();
+    frame.cam_origin = f.origin;
+    frame.cam_forward = f.forward;
+    frame.cam_right = f.right;
+    frame.cam_up = f.up;
+    frame.orthographic = f.orthographic as u32;
+    frame.lens_radius = f.lens_radius;
+    frame.focus_distance = f.focus_distance;
+}
+
 fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
     frame.seed = opts.seed;
     (frame.first_path, frame.paths_per_pixel) = opts.path_range();

@@ -81,6 +81,7 @@ fn every_variant_is_locked_and_valid() {
 fn renderer_variants() -> Vec<variants::Variant> {
     use cohort::{Group, KernelInfo, Spec};
     use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
+    use cohort_kernels::display::display;
     use cohort_kernels::extend::{extend, init_paths};
     use cohort_kernels::integrator::{Implicit, NextEvent};
     use cohort_kernels::path_end::{EachPath, WholeGroup};
@@ -144,6 +145,8 @@ fn renderer_variants() -> Vec<variants::Variant> {
             Group::Thread,
             compact_scatter::build,
         ),
+        // The viewer's tone mapping (`cohort view`).
+        variant("display", &display::INFO, Group::Thread, display::build),
         // The default render (independent cosine sampling, light sampling) and the paper's
         // coherent sampling with a whole-warp end, implicit paths.
         variant(
