@@ -185,7 +185,13 @@ pub fn run(
                     view.generation += 1;
                 }
                 Command::Exposure(stops) => view.exposure = stops,
-                Command::Save => save(&sides, &setup, &device, view.exposure)?,
+                // A file that cannot be written is reported; the render goes on.
+                Command::Save => {
+                    if let Err(e) = save(&sides, &setup, &device, view.exposure) {
+                        eprintln!("error: {e}");
+                        *shared.status.lock().unwrap() = e;
+                    }
+                }
             }
             changed = true;
         }
