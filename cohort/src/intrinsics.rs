@@ -64,6 +64,28 @@ pub mod subgroup_barrier {
     }
 }
 
+/// A value whose contents are unspecified until written: the initial value of a
+/// `let mut` with a type, e.g. a traversal stack
+/// `let mut stack: [u32; 64] = uninit();`, where `[0u32; 64]` would store 64 zeros per
+/// invocation that are never read. An element read before it is written has an
+/// unspecified value of its type (on the Vulkan backend whatever the variable's memory
+/// held; zero on wgpu, whose WGSL zero-fills every variable, and here on the host and the
+/// CPU backend), never undefined behaviour. docs/LANGUAGE.md, "Uninitialised locals".
+pub fn uninit<T: bytemuck::Zeroable>() -> T {
+    T::zeroed()
+}
+#[doc(hidden)]
+pub mod uninit {
+    /// Whether a call must be reached by every invocation of its group (docs/LANGUAGE.md
+    /// section 11): no.
+    pub const NEEDS_UNIFORM: bool = false;
+    /// The front end lowers `let mut x: T = uninit();` to a variable without a store and
+    /// refuses `uninit()` anywhere else, so this is never reached.
+    pub fn ir<T: super::GpuType>() -> super::Val<T> {
+        unreachable!("`uninit()` is lowered by the kernel front end")
+    }
+}
+
 /// Reads workgroup memory after a workgroup barrier and gives every invocation the same
 /// value (WGSL's `workgroupUniformLoad`): its result counts as uniform, so it can steer
 /// loops that contain barriers. It must itself be reached in uniform control flow.

@@ -73,6 +73,9 @@ pub struct CompiledKernel {
     /// compiler bug reported there).
     pub location: String,
     pub spec: Spec,
+    /// The kernel's `loops = finite` promise ([`crate::KernelInfo::finite_loops`]): the
+    /// backends may lower its loops without naga's loop-bound counters.
+    pub finite_loops: bool,
 }
 
 fn capabilities(uses_subgroups: bool) -> Capabilities {
@@ -134,6 +137,7 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<CompiledKernel, Comp
             built.info.file, built.info.line, built.info.column
         ),
         spec: built.spec,
+        finite_loops: built.info.finite_loops,
         entry_point,
         module,
         info,

@@ -72,6 +72,10 @@ pub struct KernelInfo {
     pub workgroup_size: u32,
     /// Group level from the attribute, used when the caller does not choose one.
     pub group: Group,
+    /// `loops = finite` in the attribute: the author promises that every loop the kernel
+    /// runs (its helpers' included) ends, so the GPU backends omit naga's loop-bound
+    /// counters (docs/LANGUAGE.md, "Loops").
+    pub finite_loops: bool,
 }
 
 /// One specialisation of a kernel.

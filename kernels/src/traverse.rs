@@ -1,6 +1,12 @@
 //! Closest-hit BVH traversal (Aila & Laine 2009 style: one ray per invocation, a stack
 //! in a local array, both child boxes tested per node fetch, nearer child first) with a
 //! watertight ray/triangle test (Woop, Benthin & Wald 2013).
+//!
+//! The traversal kernels here and in [`crate::traverse_wide`] and [`crate::traverse_cw`]
+//! are `loops = finite`: a ray visits each node of the (finite, acyclic) tree at most
+//! once, a leaf holds at most 8 triangles, and a ray whose direction or origin would send
+//! it through invalid references (NaN, zero) stops before its first node. naga's
+//! loop-bound counters cost 8 % of the renderer's paths/s (BENCHMARKS.md, session 16).
 
 use crate::layout::*;
 use crate::shadow::finish_slot;
@@ -142,7 +148,8 @@ pub fn trace2<Q: HitQuery>(
     let shear = Vec3::new(d_r.x / d_r.z, d_r.y / d_r.z, 1.0 / d_r.z);
     let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
-    let mut stack = [0u32; 64];
+    // Every entry is pushed before it is popped: no zero fill (`uninit`).
+    let mut stack: [u32; 64] = uninit();
     let mut sp = 0usize;
     let mut node = 0u32;
     // A ray with a NaN or zero direction, or a NaN or huge origin, misses (dot products
@@ -238,7 +245,7 @@ pub fn trace_ray(
 
 /// Closest hit of every live ray. `hits[r]` = (t, u, v, triangle index as bits), or
 /// w = MISS.
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn traverse(
     #[builtin(global_index)] gi: u32,
@@ -284,7 +291,7 @@ pub fn live_slot(gi: u32, count: &[u32], idrays: &[u32], state: &[UVec4]) -> u32
 /// claims, the others read it through workgroup memory between barriers) traced wrong
 /// or no hits for about 0.3% of the rays on lavapipe, although the protocol is race-free
 /// on paper; per-invocation claims are exact on every device we have.
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn traverse_persistent(
     f: &Frame,
@@ -313,7 +320,7 @@ pub fn traverse_persistent(
 
 /// The shadow pass of next-event estimation over the BVH2 (trees too deep for the 8-wide
 /// kernel's stack): as `crate::traverse_wide::trace_shadow8`.
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn trace_shadow(
     #[builtin(global_index)] gi: u32,

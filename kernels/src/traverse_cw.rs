@@ -131,7 +131,8 @@ pub fn trace_cw<Q: HitQuery>(
     let oct = neg.x | (neg.y << 1) | (neg.z << 2);
     let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
-    let mut stack = [0u32; STACK_SIZE];
+    // Every entry is pushed before it is popped: no zero fill (`uninit`).
+    let mut stack: [u32; STACK_SIZE] = uninit();
     let mut sp = 0usize;
     let mut node = 0u32;
     // As in trace8: a NaN or zero direction, or a NaN or huge origin, misses.
@@ -199,7 +200,7 @@ pub fn trace_cw<Q: HitQuery>(
 
 /// Closest hit of every live ray through the compressed 8-wide BVH: a drop-in for
 /// `traverse_wide::traverse8` with `nodes` from `cohort_scenes::GpuCwBvh`.
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn traverse_cw(
     #[builtin(global_index)] gi: u32,

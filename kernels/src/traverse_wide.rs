@@ -145,7 +145,8 @@ pub fn trace8<Q: HitQuery>(
     let meta_shift = (oct & 3) * 8;
     let mut best_t = tmax;
     let mut best = Vec4::new(best_t, 0.0, 0.0, f32::from_bits(MISS));
-    let mut stack = [0u32; STACK_SIZE];
+    // Every entry is pushed before it is popped: no zero fill (`uninit`).
+    let mut stack: [u32; STACK_SIZE] = uninit();
     let mut sp = 0usize;
     let mut node = 0u32;
     // A ray with a NaN or zero direction, or a NaN or huge origin, misses (dot products
@@ -232,7 +233,7 @@ pub fn trace_ray8(
 
 /// Closest hit of every live ray through the 8-wide BVH: a drop-in for
 /// [`crate::traverse::traverse`] with `nodes` from `cohort_scenes::GpuBvh8`.
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn traverse8(
     #[builtin(global_index)] gi: u32,
@@ -255,7 +256,7 @@ pub fn traverse8(
 /// The shadow pass of next-event estimation over the 8-wide BVH: for every live slot,
 /// trace its light sample's shadow ray (any hit, early exit) and finish the slot
 /// (`crate::shadow::finish_slot`).
-#[kernel(workgroup = 64)]
+#[kernel(workgroup = 64, loops = finite)]
 #[allow(clippy::too_many_arguments)]
 pub fn trace_shadow8(
     #[builtin(global_index)] gi: u32,

@@ -15,6 +15,7 @@ use crate::uniformity;
 pub struct KernelAttr {
     workgroup: u32,
     group: TokenStream,
+    finite_loops: bool,
 }
 
 impl Parse for KernelAttr {
@@ -22,6 +23,7 @@ impl Parse for KernelAttr {
         let mut attr = KernelAttr {
             workgroup: 64,
             group: quote!(::cohort::Group::Thread),
+            finite_loops: false,
         };
         let mut group_block: Option<u32> = None;
         while !input.is_empty() {
@@ -61,10 +63,20 @@ impl Parse for KernelAttr {
                         }
                     };
                 }
+                "loops" => {
+                    let v: syn::Ident = input.parse()?;
+                    if v != "finite" {
+                        return Err(syn::Error::new(
+                            v.span(),
+                            "`loops = finite` is the only loop option: it promises that every loop of the kernel ends (docs/LANGUAGE.md, \"Loops\")",
+                        ));
+                    }
+                    attr.finite_loops = true;
+                }
                 other => {
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown kernel option `{other}`; expected `workgroup = N` or `group = Thread | Warp | Block(n) | Grid`"),
+                        format!("unknown kernel option `{other}`; expected `workgroup = N`, `group = Thread | Warp | Block(n) | Grid` or `loops = finite`"),
                     ))
                 }
             }
@@ -382,6 +394,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     let name_lit = fn_name.to_string();
     let wg = attr.workgroup;
     let group = attr.group;
+    let finite_loops = attr.finite_loops;
     let generics = &f.sig.generics;
     let type_params: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
     let (impl_g, _, where_clause) = generics.split_for_impl();
@@ -432,6 +445,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 column: #line_col.1,
                 workgroup_size: #wg,
                 group: #group,
+                finite_loops: #finite_loops,
             };
 
             #(#layout_checks)*

@@ -290,6 +290,9 @@ impl Rewriter {
         }
         let name = ident.to_string();
         let span = l.span();
+        if let Some(call) = l.init.as_ref().and_then(|i| uninit_call(&i.expr)) {
+            return self.uninit_local(l, call, ident, mutable, ty);
+        }
         let init = match &l.init {
             Some(i) => Some(self.rv(&i.expr)?),
             None => None,
@@ -323,6 +326,43 @@ impl Rewriter {
         };
         self.bind(&name, bind);
         Ok(out)
+    }
+
+    /// `let mut x: T = uninit();` (or `uninit::<T>()`): a variable without an initial
+    /// store (docs/LANGUAGE.md, "Uninitialised locals").
+    fn uninit_local(
+        &mut self,
+        l: &syn::Local,
+        call: &syn::ExprCall,
+        ident: syn::Ident,
+        mutable: bool,
+        ty: Option<syn::Type>,
+    ) -> Result<TokenStream> {
+        let span = l.span();
+        if !mutable {
+            return err_at(l, "`uninit()` starts a variable that is written before it is read: bind it with `let mut`, e.g. `let mut stack: [u32; 64] = uninit();`");
+        }
+        let turbofish = match &*call.func {
+            Expr::Path(p) => match &p.path.segments.last().map(|s| &s.arguments) {
+                Some(syn::PathArguments::AngleBracketed(a)) => {
+                    a.args.first().and_then(|g| match g {
+                        syn::GenericArgument::Type(t) => Some(t.clone()),
+                        _ => None,
+                    })
+                }
+                _ => None,
+            },
+            _ => None,
+        };
+        let Some(t) = ty.or(turbofish) else {
+            return err_at(
+                l,
+                "`uninit()` needs the variable's type: `let mut stack: [u32; 64] = uninit();`",
+            );
+        };
+        let name = ident.to_string();
+        self.bind(&name, Bind::Var);
+        Ok(quote_spanned! {span=> let #ident = ::cohort::ir::Var::<#t>::uninit(#name); })
     }
 
     // ---------------------------------------------------------------- statements
@@ -757,6 +797,9 @@ impl Rewriter {
                 "`group_share` can only be called directly in a `#[kernel]` body (its group level is the kernel's)",
             );
         }
+        if uninit_call(&Expr::Call(c.clone())).is_some() {
+            return err_at(c, "`uninit()` is only supported as the initial value of a `let mut` with a type, e.g. `let mut stack: [u32; 64] = uninit();`");
+        }
         let mut args = Vec::new();
         for a in &c.args {
             args.push(match a {
@@ -905,4 +948,15 @@ fn is_statement_like(e: &Expr) -> bool {
         Expr::Binary(b) => compound_op(&b.op).is_some(),
         _ => false,
     }
+}
+
+/// `uninit()`, `uninit::<T>()` or `cohort::uninit()` (any path ending in `uninit`, no
+/// arguments): the intrinsic for a variable without an initial store.
+fn uninit_call(e: &Expr) -> Option<&syn::ExprCall> {
+    let Expr::Call(c) = e else { return None };
+    let Expr::Path(p) = &*c.func else { return None };
+    (p.qself.is_none()
+        && c.args.is_empty()
+        && p.path.segments.last().is_some_and(|s| s.ident == "uninit"))
+    .then_some(c)
 }

@@ -14,59 +14,18 @@
 //! `cargo run --release -p cohort-render --example kernel_bench -- [scene[,scene...]] [backend]`
 //! (`kernel_bench wgsl` prints the WGSL of `traverse8` and exits.)
 
-use cohort::runtime::{BackendKind, Device, DispatchStats};
+use cohort::runtime::{BackendKind, Device};
 use cohort_kernels::compact;
 use cohort_kernels::copy::copy_u32;
-use cohort_kernels::layout::{BvhNode, Frame, Triangle, MISS};
+use cohort_kernels::layout::{BvhNode, Frame, Triangle};
 use cohort_kernels::traverse::{traverse, traverse_persistent};
 use cohort_kernels::traverse_cw::{traverse_cw, CwNode};
 use cohort_kernels::traverse_wide::{traverse8, WideNode};
 use cohort_scenes::{embedded, GpuBvh, GpuBvh8, GpuCwBvh};
-use glam::{UVec4, Vec3, Vec4};
+use glam::{UVec4, Vec4};
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Records `reps` dispatches with `record` into batches and runs them until the GPU has
-/// been busy for 0.3 s (its clocks ramp up from idle over about that time, and the host
-/// phases of this benchmark let it idle), then once more; returns that batch's stats.
-fn timed(
-    d: &Device,
-    reps: u32,
-    record: impl Fn(&mut cohort::runtime::Batch),
-) -> Vec<DispatchStats> {
-    let start = std::time::Instant::now();
-    loop {
-        let mut b = d.batch();
-        for _ in 0..reps {
-            record(&mut b);
-        }
-        let stats = b.submit().unwrap();
-        if start.elapsed().as_secs_f64() > 0.3 {
-            return stats;
-        }
-    }
-}
-
-fn ns(s: &DispatchStats) -> f64 {
-    s.gpu_time_ns.expect("this benchmark needs GPU timestamps") as f64
-}
-
-/// Hits that differ between two traversals: another triangle at a t that differs by more
-/// than rounding.
-fn differ(a: &[Vec4], b: &[Vec4]) -> usize {
-    a.iter()
-        .zip(b)
-        .filter(|(a, b)| {
-            a.w.to_bits() != b.w.to_bits()
-                && (a.w.to_bits() == MISS
-                    || b.w.to_bits() == MISS
-                    || (a.x - b.x).abs() > 1e-5 * a.x.abs().max(1.0))
-        })
-        .count()
-}
+mod common;
+use common::{differ, diffuse_rays, median, ns, primary_rays, timed};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -110,27 +69,8 @@ fn bench_traversal(d: &Device, scene_name: &str) {
         .unwrap();
     let tris_host: &[Triangle] = bytemuck::cast_slice(&bvh.triangles);
     let tris = d.upload(tris_host).unwrap();
-    let n = 1u32 << 20;
-    let side = 1024u32;
-    let cam = {
-        let mut c = scene.camera;
-        c.width = side;
-        c.height = side;
-        c
-    };
-    let order = cohort_scenes::morton_pixel_order(side, side);
-    let origin = cam.origin();
-    let o: Vec<Vec4> = vec![origin.extend(0.0); n as usize];
-    let dirs: Vec<Vec4> = order
-        .iter()
-        .map(|&p| {
-            cam.ray_direction(
-                ((p % side) as f32 + 0.5) / side as f32,
-                ((p / side) as f32 + 0.5) / side as f32,
-            )
-            .extend(0.0)
-        })
-        .collect();
+    let (o, dirs) = primary_rays(&scene);
+    let n = o.len() as u32;
     let frame = Frame {
         has_geometry: 1,
         slots: n,
@@ -301,42 +241,7 @@ fn bench_traversal(d: &Device, scene_name: &str) {
     let t_primary = compare("primary", &ob, &db);
     let primary_hits = d.read(&hits).unwrap();
 
-    // Unsorted diffuse rays: cosine directions around the normal at each primary hit.
-    let mut seed = 0x2545F4914F6CDD1Du64;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let mut o2 = Vec::with_capacity(n as usize);
-    let mut d2 = Vec::with_capacity(n as usize);
-    let mut hit_count = 0;
-    for (k, h) in primary_hits.iter().enumerate() {
-        let dir = dirs[k].truncate();
-        let tri = h.w.to_bits();
-        if tri == MISS {
-            o2.push(origin.extend(0.0));
-            d2.push(dir.extend(0.0));
-            continue;
-        }
-        hit_count += 1;
-        let t = tris_host[tri as usize];
-        let mut nrm = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
-        if nrm.dot(dir) > 0.0 {
-            nrm = -nrm;
-        }
-        let p = origin + dir * h.x + nrm * 1e-3;
-        let (u1, u2) = (rnd(), rnd());
-        let r = u1.sqrt();
-        let phi = 2.0 * std::f32::consts::PI * u2;
-        let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
-        let tangent = nrm.any_orthonormal_vector();
-        let bitangent = nrm.cross(tangent);
-        let w = tangent * local.x + bitangent * local.y + nrm * local.z;
-        o2.push(p.extend(0.0));
-        d2.push(w.extend(0.0));
-    }
+    let (o2, d2, hit_count) = diffuse_rays(&o, &dirs, &primary_hits, tris_host);
     let ob2 = d.upload(&o2).unwrap();
     let db2 = d.upload(&d2).unwrap();
     compare_cw("diffuse", &ob2, &db2);

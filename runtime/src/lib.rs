@@ -28,6 +28,7 @@ mod error;
 mod float_controls;
 mod pipeline_cache;
 pub mod print;
+mod spirv_locals;
 mod timing;
 mod vulkan_backend;
 mod vulkan_init;

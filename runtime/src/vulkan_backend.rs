@@ -1027,20 +1027,27 @@ pub fn lower(kernel: &CompiledKernel) -> Result<Vec<u32>> {
         // kernel, which made a 16 KiB workgroup array cost seconds on lavapipe.
         zero_initialize_workgroup_memory:
             naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Native,
+        // naga guards every loop with a 64-bit iteration counter, so that a driver cannot
+        // assume an endless loop away. A kernel that promises `loops = finite` does
+        // without: on confroom's traversal the counters cost 8 % of the renderer's paths/s
+        // (H200, BENCHMARKS.md, session 16).
+        force_loop_bounding: !kernel.finite_loops,
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
         shader_stage: naga::ShaderStage::Compute,
         entry_point: kernel.entry_point.clone(),
     };
-    naga::back::spv::write_vec(&kernel.module, &kernel.info, &options, Some(&pipeline)).map_err(
-        |e| RuntimeError::Lowering {
-            kernel: kernel.name.clone(),
-            location: kernel.location.clone(),
-            target: "SPIR-V",
-            detail: e.to_string(),
-        },
-    )
+    let mut words =
+        naga::back::spv::write_vec(&kernel.module, &kernel.info, &options, Some(&pipeline))
+            .map_err(|e| RuntimeError::Lowering {
+                kernel: kernel.name.clone(),
+                location: kernel.location.clone(),
+                target: "SPIR-V",
+                detail: e.to_string(),
+            })?;
+    crate::spirv_locals::drop_array_local_initializers(&mut words);
+    Ok(words)
 }
 
 #[cfg(test)]

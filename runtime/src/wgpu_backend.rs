@@ -234,12 +234,24 @@ impl WgpuDevice {
             return Err(fail("the artifact has no WGSL code".into()));
         }
         let scope = Scope::push(&self.device);
-        let module = self
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(&kernel.name),
-                source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(wgsl)),
-            });
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some(&kernel.name),
+            source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(wgsl)),
+        };
+        let module = match &kernel.code {
+            // A `loops = finite` kernel: no loop-bound counters (as on the Vulkan backend);
+            // bounds checks stay as wgpu's default.
+            KernelCode::Compiled(k) if k.finite_loops => {
+                let checks = wgpu::ShaderRuntimeChecks {
+                    force_loop_bounding: false,
+                    ..wgpu::ShaderRuntimeChecks::checked()
+                };
+                // SAFETY: the kernel's author promises that all its loops end
+                // (`KernelInfo::finite_loops`); only loop bounding is turned off.
+                unsafe { self.device.create_shader_module_trusted(desc, checks) }
+            }
+            _ => self.device.create_shader_module(desc),
+        };
         let entries: Vec<wgpu::BindGroupLayoutEntry> = kernel
             .bindings
             .iter()

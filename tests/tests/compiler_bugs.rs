@@ -14,6 +14,7 @@ static INFO: KernelInfo = KernelInfo {
     column: 7,
     workgroup_size: 64,
     group: Group::Thread,
+    finite_loops: false,
 };
 
 #[test]

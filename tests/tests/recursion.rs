@@ -14,6 +14,7 @@ static INFO: KernelInfo = KernelInfo {
     column: 1,
     workgroup_size: 64,
     group: Group::Thread,
+    finite_loops: false,
 };
 
 struct Ping;

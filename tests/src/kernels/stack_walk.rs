@@ -1,5 +1,6 @@
 //! A stack in a function-local array indexed at run time, driven by a loop: a
-//! depth-first walk of an implicit binary tree, as a BVH traversal does.
+//! depth-first walk of an implicit binary tree, as a BVH traversal does. One stack starts
+//! as `uninit()` (every entry is pushed before it is popped), the other zero-filled.
 use cohort::prelude::*;
 
 #[kernel(workgroup = 64)]
@@ -11,7 +12,7 @@ pub fn stack_walk(#[builtin(global_index)] gi: u32, queries: &[UVec2], out: &mut
     // Leaves of the implicit tree over [0, 1024) are 1-wide; a query sums the leaf
     // indices in [lo, hi) and counts visited nodes.
     let q = queries[i];
-    let mut stack = [0u32; 32];
+    let mut stack: [u32; 32] = uninit();
     let mut lo_stack = [0u32; 32];
     let mut sp = 1usize;
     stack[0] = 1024;
