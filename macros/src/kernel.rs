@@ -344,7 +344,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 launch_names.push(name.clone());
                 launch_params.push(quote_spanned! {pspan=> #name: &#t });
                 let buf = format_ident!("__uniform_{}", name);
-                uniform_uploads.push(quote! { let #buf = device.upload_uniform(#name)?; });
+                uniform_uploads.push(quote! { let #buf = __cohort_device.upload_uniform(#name)?; });
                 launch_args.push(quote! { #buf.arg() });
             }
             ParamKind::Workgroup(t) => {
@@ -366,10 +366,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         let body = &cl.body;
         let input = &cl.inputs[0];
         grid_uploads.push(quote! {
-            let #buf = if spec.group == ::cohort::Group::Grid {
+            let #buf = if __cohort_spec.group == ::cohort::Group::Grid {
                 #[allow(unused_variables)]
                 let value = (|#input: u32| #body)(0u32);
-                Some(device.upload(::core::slice::from_ref(&value))?)
+                Some(__cohort_device.upload(::core::slice::from_ref(&value))?)
             } else {
                 None
             };
@@ -380,9 +380,9 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     // `len()` reads the element counts the launch passes (a binding the kernel has only when
     // it calls `len()`): an empty buffer is bound to a stand-in whose size the GPU would see.
     let lengths_upload = quote! {
-        let __lengths_at = art.bindings.iter().position(|b| b.name == ::cohort::ir::LENGTHS_BINDING);
+        let __lengths_at = __cohort_art.bindings.iter().position(|b| b.name == ::cohort::ir::LENGTHS_BINDING);
         let __lengths = match __lengths_at {
-            Some(_) => Some(device.upload(&[#(#storage_names.len() as u32),*])?),
+            Some(_) => Some(__cohort_device.upload(&[#(#storage_names.len() as u32),*])?),
             None => None,
         };
     };
@@ -495,49 +495,52 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
             }
 
             /// Runs the kernel with the attribute's group level.
+            // The launch functions' own parameters and locals are `__cohort_*`, and they
+            // call this module's functions through `self::`, so that a kernel parameter
+            // of any name (`device`, `grid`, `spec`, ...) can sit beside them.
             pub fn launch #launch_generics (
-                device: &::cohort::runtime::Device,
-                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                __cohort_device: &::cohort::runtime::Device,
+                __cohort_grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
                 #(#launch_params),*
             ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
-                let spec = spec(device, ::core::option::Option::None);
-                launch_spec #turbofish (device, &spec, grid, #(#launch_names),*)
+                let __cohort_spec = self::spec(__cohort_device, ::core::option::Option::None);
+                self::launch_spec #turbofish (__cohort_device, &__cohort_spec, __cohort_grid, #(#launch_names),*)
             }
 
             /// Records one specialisation of the kernel into `batch` (submitted later
             /// with the batch's other dispatches, in order).
             pub fn record #launch_generics (
-                batch: &mut ::cohort::runtime::Batch<'_>,
-                spec: &::cohort::Spec,
-                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                __cohort_batch: &mut ::cohort::runtime::Batch<'_>,
+                __cohort_spec: &::cohort::Spec,
+                __cohort_grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
                 #(#launch_params),*
             ) -> ::cohort::Result<()> #where_static {
-                let device = batch.device();
-                let art = artifact #turbofish (spec)?;
+                let __cohort_device = __cohort_batch.device();
+                let __cohort_art = self::artifact #turbofish (__cohort_spec)?;
                 #(#uniform_uploads)*
                 #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
                 #(#grid_uploads)*
                 #lengths_arg
-                let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
-                ::core::result::Result::Ok(batch.dispatch(&art, &__args, dispatch)?)
+                let __cohort_dispatch = ::cohort::launch::dispatch_of(__cohort_grid.into(), __cohort_spec, __cohort_device.info().max_workgroups_per_dim);
+                ::core::result::Result::Ok(__cohort_batch.dispatch(&__cohort_art, &__args, __cohort_dispatch)?)
             }
 
             /// Runs one specialisation of the kernel.
             pub fn launch_spec #launch_generics (
-                device: &::cohort::runtime::Device,
-                spec: &::cohort::Spec,
-                grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
+                __cohort_device: &::cohort::runtime::Device,
+                __cohort_spec: &::cohort::Spec,
+                __cohort_grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
                 #(#launch_params),*
             ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
-                let art = artifact #turbofish (spec)?;
+                let __cohort_art = self::artifact #turbofish (__cohort_spec)?;
                 #(#uniform_uploads)*
                 #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
                 #(#grid_uploads)*
                 #lengths_arg
-                let dispatch = ::cohort::launch::dispatch_of(grid.into(), spec, device.info().max_workgroups_per_dim);
-                ::core::result::Result::Ok(device.dispatch(&art, &__args, dispatch)?)
+                let __cohort_dispatch = ::cohort::launch::dispatch_of(__cohort_grid.into(), __cohort_spec, __cohort_device.info().max_workgroups_per_dim);
+                ::core::result::Result::Ok(__cohort_device.dispatch(&__cohort_art, &__args, __cohort_dispatch)?)
             }
         }
     })
