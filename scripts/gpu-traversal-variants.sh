@@ -11,6 +11,9 @@
 # $OUT/results.tgz (the device tool brings back a few files only).
 set -uo pipefail
 OUT="${OUT:?set OUT to the folder for the results (the device tool sets it)}"
+for f in traversal_variants traversal_variants-old cohort-old cohort-new kernel_bench shared-scenes.tar; do
+  [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build the release binaries here, xz them into gpu-pack/ and pack ../shared/scenes as shared-scenes.tar.xz first (BENCHMARKS.md, session 16)" >&2; exit 2; }
+done
 R=$(mktemp -d)
 (cd gpu-pack && for f in *.xz; do xz -dkf "$f"; done && chmod +x traversal_variants* cohort-* kernel_bench) || exit 1
 mkdir -p "$R/shared" && tar xf gpu-pack/shared-scenes.tar -C "$R/shared"
