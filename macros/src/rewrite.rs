@@ -797,7 +797,7 @@ impl Rewriter {
                 "`group_share` can only be called directly in a `#[kernel]` body (its group level is the kernel's)",
             );
         }
-        if uninit_call(&Expr::Call(c.clone())).is_some() {
+        if is_uninit(c) {
             return err_at(c, "`uninit()` is only supported as the initial value of a `let mut` with a type, e.g. `let mut stack: [u32; 64] = uninit();`");
         }
         let mut args = Vec::new();
@@ -952,11 +952,19 @@ fn is_statement_like(e: &Expr) -> bool {
 
 /// `uninit()`, `uninit::<T>()` or `cohort::uninit()` (any path ending in `uninit`, no
 /// arguments): the intrinsic for a variable without an initial store.
-fn uninit_call(e: &Expr) -> Option<&syn::ExprCall> {
-    let Expr::Call(c) = e else { return None };
-    let Expr::Path(p) = &*c.func else { return None };
-    (p.qself.is_none()
+fn is_uninit(c: &syn::ExprCall) -> bool {
+    let Expr::Path(p) = &*c.func else {
+        return false;
+    };
+    p.qself.is_none()
         && c.args.is_empty()
-        && p.path.segments.last().is_some_and(|s| s.ident == "uninit"))
-    .then_some(c)
+        && p.path.segments.last().is_some_and(|s| s.ident == "uninit")
+}
+
+/// `e` as an `uninit()` call ([`is_uninit`]).
+fn uninit_call(e: &Expr) -> Option<&syn::ExprCall> {
+    match e {
+        Expr::Call(c) if is_uninit(c) => Some(c),
+        _ => None,
+    }
 }
