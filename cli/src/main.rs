@@ -130,6 +130,11 @@ struct RenderArgs {
     /// No stream compaction (the default; kept for scripts written for earlier versions).
     #[arg(long)]
     no_compact: bool,
+    /// Sort the rays by direction octant and origin cell before the traversal, every K
+    /// iterations (0: never, the default). The image is the same; it changes only the
+    /// order in which the traversal takes the rays (BENCHMARKS.md: it does not pay).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    reorder: u32,
     /// `nee`: next-event estimation (an emitter sample at every non-delta vertex, combined
     /// with BSDF sampling by MIS, as Mitsuba's `path` integrator does; the meaning of a
     /// scene's `<integrator type="path">`), or `path`: implicit path tracing (the paper's).
@@ -233,6 +238,7 @@ impl RenderArgs {
             interleave: self.interleave,
             coherent_glossy: self.coherent_glossy,
             compact: self.compact,
+            reorder: self.reorder,
             integrator: self.integrator.clone(),
             coherent_light: self.coherent_light,
             light_cells: self.light_cells,
@@ -426,8 +432,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
         stats.iterations
     );
     println!(
-        "kernel time    {:.1} ms: traverse {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
+        "kernel time    {:.1} ms: reorder {:.1}, traverse {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
         ms(k.total()),
+        ms(k.reorder),
         ms(k.traverse),
         ms(k.extend),
         ms(k.shadow),
@@ -483,11 +490,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
-            "compaction": a.compact, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
+            "compaction": a.compact, "reorder": a.reorder, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "shard": shard.to_string(), "devices": device_names,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays,
-            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "total": ms(k.total()) },
+            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "reorder": ms(k.reorder), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },

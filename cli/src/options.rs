@@ -18,6 +18,7 @@ pub struct Config {
     pub interleave: u32,
     pub coherent_glossy: bool,
     pub compact: bool,
+    pub reorder: u32,
     pub integrator: String,
     pub coherent_light: bool,
     pub light_cells: u32,
@@ -35,6 +36,7 @@ pub const NAMES: &[&str] = &[
     "interleave",
     "coherent-glossy",
     "compact",
+    "reorder",
     "integrator",
     "coherent-light",
     "light-cells",
@@ -89,6 +91,7 @@ impl Config {
             "interleave" => parse_num(value).map(|v| self.interleave = v),
             "coherent-glossy" => parse_bool(value).map(|v| self.coherent_glossy = v),
             "compact" => parse_bool(value).map(|v| self.compact = v),
+            "reorder" => parse_num(value).map(|v| self.reorder = v),
             "integrator" => {
                 self.integrator = value.to_string();
                 Ok(())
@@ -165,6 +168,7 @@ impl Config {
             coherent_glossy: self.coherent_glossy,
             seed: self.seed,
             compact: self.compact,
+            reorder: self.reorder,
             whole_group_end,
             integrator,
             roulette,
@@ -214,6 +218,7 @@ mod tests {
             interleave: 1,
             coherent_glossy: false,
             compact: false,
+            reorder: 0,
             integrator: "nee".into(),
             coherent_light: false,
             light_cells: 4,

@@ -8,6 +8,8 @@
 //! with next-event estimation `trace_shadow*` (occlusion of each vertex's light sample;
 //! adds it, and the estimate of each ended path to its pixel) →
 //! `compact_*` (stable partition of `idrays`: extended rays first, regenerated last).
+//! With ray reordering, `bin_*` (`reorder`) first sort the live rays by direction octant
+//! and origin cell into the list the traversal alone reads.
 //! A viewer (`cohort view`) runs `display` between iterations: the accumulation, tone-mapped.
 //! Path state lives in structure-of-arrays buffers indexed by ray slot; slot `g` belongs
 //! to pixel `slot_pixel[g]` (Morton order), and only `idrays` is ever reordered.
@@ -28,6 +30,7 @@ pub mod microfacet;
 pub mod path_end;
 pub mod perturb;
 pub mod principled;
+pub mod reorder;
 pub mod rng;
 pub mod rough_conductor;
 pub mod rough_dielectric;

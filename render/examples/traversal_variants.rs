@@ -11,11 +11,11 @@
 //!   and origin cell (Morton order of a 2^10 grid per axis over the scene's bounds), both
 //!   key orders: what sorting can gain traversal at most (the sort itself not counted);
 //! - **binned on the GPU**: the same rays binned by a 12-bit key (octant, then the Morton
-//!   code of an 8x8x8 grid of origin cells) with a counting sort in three kernels
-//!   (`bin_count`: key and histogram by atomics, `bin_offsets`: one workgroup's exclusive
-//!   scan, `bin_scatter`), which permutes the ray ids `traverse8` reads (`idrays`, as in
-//!   the renderer), against `traverse8` over the identity ids: what reordering gains with
-//!   its own cost paid.
+//!   code of an 8x8x8 grid of origin cells) with the renderer's counting sort
+//!   (`cohort_kernels::reorder`: `bin_clear`, `bin_count`: key and histogram by atomics,
+//!   `bin_offsets`: one workgroup's exclusive scan, `bin_scatter`), which permutes the ray
+//!   ids `traverse8` reads (`idrays`, as in the renderer), against `traverse8` over the
+//!   identity ids: what reordering gains with its own cost paid.
 //!
 //! Every variant's hits are compared with `traverse8`'s. Timings are GPU timestamps
 //! (median of 10 dispatches after 0.3 s of the same kernel); `traverse8` runs first and
@@ -28,6 +28,7 @@ mod common;
 use cohort::prelude::*;
 use cohort::runtime::{BackendKind, Device, GpuBuffer};
 use cohort_kernels::layout::{Frame, Triangle, MISS};
+use cohort_kernels::reorder::{self, bin_clear, bin_count, bin_offsets, bin_scatter};
 use cohort_kernels::traverse::{dominant_axis, leaf_hits, rotate};
 use cohort_kernels::traverse_wide::{
     hit4, permute8, pick, trace8, traverse8, AnyHit, Closest, WideNode, STACK_SIZE,
@@ -175,98 +176,6 @@ pub fn traverse8_dynamic(
                 active = false;
             }
         }
-    }
-}
-
-/// Bins of the GPU binning: 3 octant bits and a 9-bit origin cell.
-const BINS: u32 = 4096;
-
-/// The 12-bit bin of ray `i`: direction octant, then the Morton code of its origin's cell
-/// in an 8x8x8 grid over `cells` = (lo, 8 / extent).
-#[kernel_fn]
-pub fn bin_key(o: Vec3, d: Vec3, cells: &[Vec4]) -> u32 {
-    let c = ((o - cells[0].truncate()) * cells[1].truncate())
-        .max(Vec3::ZERO)
-        .min(Vec3::splat(7.0));
-    let x = c.x as u32;
-    let y = c.y as u32;
-    let z = c.z as u32;
-    let mut cell = 0u32;
-    for b in 0..3u32 {
-        cell |= (((x >> b) & 1) << (3 * b))
-            | (((y >> b) & 1) << (3 * b + 1))
-            | (((z >> b) & 1) << (3 * b + 2));
-    }
-    let oct = (d.x < 0.0) as u32 | ((d.y < 0.0) as u32) << 1 | ((d.z < 0.0) as u32) << 2;
-    (oct << 9) | cell
-}
-
-/// Key of every ray and the histogram of keys.
-#[kernel(workgroup = 256, loops = finite)]
-pub fn bin_count(
-    #[builtin(global_index)] gi: u32,
-    count: &[u32],
-    ray_o: &[Vec4],
-    ray_d: &[Vec4],
-    cells: &[Vec4],
-    keys: &mut [u32],
-    bins: &[AtomicU32],
-) {
-    if gi < count[0] {
-        let i = gi as usize;
-        let k = bin_key(ray_o[i].truncate(), ray_d[i].truncate(), cells);
-        keys[i] = k;
-        bins[k as usize].fetch_add(1, Ordering::Relaxed);
-    }
-}
-
-/// One workgroup of 256: the histogram's exclusive prefix sums, in place (16 bins per
-/// invocation, then a scan of the 256 partial sums in workgroup memory).
-#[kernel(workgroup = 256, loops = finite)]
-pub fn bin_offsets(
-    #[builtin(local_index)] li: u32,
-    #[workgroup] part: &mut [u32; 256],
-    bins: &mut [u32],
-) {
-    let per = BINS / 256;
-    let mut sum = 0u32;
-    for j in 0..per {
-        sum += bins[(li * per + j) as usize];
-    }
-    part[li as usize] = sum;
-    workgroup_barrier();
-    let mut step = 1u32;
-    while step < 256 {
-        let mut v = part[li as usize];
-        if li >= step {
-            v += part[(li - step) as usize];
-        }
-        workgroup_barrier();
-        part[li as usize] = v;
-        workgroup_barrier();
-        step *= 2;
-    }
-    let mut run = part[li as usize] - sum;
-    for j in 0..per {
-        let k = (li * per + j) as usize;
-        let c = bins[k];
-        bins[k] = run;
-        run += c;
-    }
-}
-
-/// Each ray's id at the next free place of its bin.
-#[kernel(workgroup = 256, loops = finite)]
-pub fn bin_scatter(
-    #[builtin(global_index)] gi: u32,
-    count: &[u32],
-    keys: &[u32],
-    offsets: &[AtomicU32],
-    ids: &mut [u32],
-) {
-    if gi < count[0] {
-        let at = offsets[keys[gi as usize] as usize].fetch_add(1, Ordering::Relaxed);
-        ids[at as usize] = gi;
     }
 }
 
@@ -448,35 +357,26 @@ fn bench_scene(d: &Device, name: &str) {
         let hi = o2
             .iter()
             .fold(Vec3::splat(f32::MIN), |a, p| a.max(p.truncate()));
-        let grid = d
-            .upload(&[
-                lo.extend(0.0),
-                (8.0 / (hi - lo).max(Vec3::splat(1e-20))).extend(0.0),
-            ])
-            .unwrap();
+        let grid = d.upload(&reorder::cells(lo, hi)).unwrap();
         let ob = d.upload(&o2).unwrap();
         let db = d.upload(&d2).unwrap();
         let keys = d.alloc::<u32>(n as usize).unwrap();
-        let bins = d.alloc::<u32>(BINS as usize).unwrap();
+        let bins = d.alloc::<u32>(reorder::HISTOGRAM_LEN).unwrap();
         let sorted = d.alloc::<u32>(n as usize).unwrap();
-        let (cs, os, ss) = (
+        let (zs, cs, os, ss) = (
+            bin_clear::spec(d, None),
             bin_count::spec(d, None),
             bin_offsets::spec(d, None),
             bin_scatter::spec(d, None),
         );
-        let zero = d.upload(&vec![0u32; BINS as usize]).unwrap();
         let record_sort = |b: &mut cohort::runtime::Batch| {
-            cohort_kernels::copy::copy_u32::record(
-                b,
-                &cohort_kernels::copy::copy_u32::spec(d, None),
-                BINS,
-                &zero,
-                &bins,
+            bin_clear::record(b, &zs, reorder::HISTOGRAM_LEN as u32, &bins).unwrap();
+            bin_count::record(
+                b, &cs, n, &count, &ids, &state, &ob, &db, &grid, &keys, &bins,
             )
             .unwrap();
-            bin_count::record(b, &cs, n, &count, &ob, &db, &grid, &keys, &bins).unwrap();
             bin_offsets::record(b, &os, 256u32, &bins).unwrap();
-            bin_scatter::record(b, &ss, n, &count, &keys, &bins, &sorted).unwrap();
+            bin_scatter::record(b, &ss, n, &count, &ids, &keys, &bins, &sorted).unwrap();
         };
         let t_id = |ids: &Buf<u32>| -> f64 {
             median_ns(d, reps, |b| {

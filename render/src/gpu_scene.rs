@@ -38,6 +38,8 @@ pub struct GpuScene {
     /// same `triangles`, for `traverse_wide::traverse8`; `None` where the tree may need more
     /// stack than that kernel has (then use `traverse::traverse`).
     pub nodes8: Option<GpuBuffer<WideNode>>,
+    /// The scene's bounding box (the BVH root's), for ray reordering's grid of origin cells.
+    pub bounds: [glam::Vec3; 2],
 }
 
 impl GpuScene {
@@ -138,6 +140,7 @@ impl GpuScene {
             env_light: lights.env_light,
             bvh_build: std::time::Duration::ZERO,
             upload: started.elapsed(),
+            bounds: [bvh.bounds_min, bvh.bounds_max],
             nodes8: match wide {
                 Some(w) => Some(upload::<WideNode>(device, cast(&w.nodes))?),
                 None => None,

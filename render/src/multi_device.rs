@@ -86,6 +86,7 @@ pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
         all.kernel.extend += s.kernel.extend;
         all.kernel.shadow += s.kernel.shadow;
         all.kernel.compact += s.kernel.compact;
+        all.kernel.reorder += s.kernel.reorder;
         all.wall = all.wall.max(s.wall);
         all.host.record += s.host.record;
         all.host.submit += s.host.submit;

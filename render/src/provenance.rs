@@ -129,7 +129,7 @@ impl Provenance {
         };
         let options = format!(
             "algorithm={} in-patch={:?} n={} group-rr={} whole-group-end={} rr-continue={} roulette={} interleave={} coherent-glossy={} \
-             compact={} coherent-light={} light-cells={}",
+             compact={} reorder={} coherent-light={} light-cells={}",
             o.algorithm.name(),
             o.in_patch,
             o.patches_n,
@@ -140,6 +140,7 @@ impl Provenance {
             o.interleave,
             o.coherent_glossy,
             o.compact,
+            o.reorder,
             o.coherent_light,
             o.light_cells,
         );

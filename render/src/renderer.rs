@@ -20,6 +20,7 @@ use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
+use cohort_kernels::reorder::{self, bin_clear, bin_count, bin_offsets, bin_scatter};
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
 };
@@ -134,6 +135,10 @@ pub struct RenderOptions {
     pub size: Option<(u32, u32)>,
     /// Run the compaction kernels (the paper's `(NO)` variants turn it off).
     pub compact: bool,
+    /// Ray reordering (`cohort_kernels::reorder`): every this many iterations, sort the
+    /// live rays by direction octant and origin cell before the traversal; 0 = never.
+    /// The image is the same; only the traversal's order of rays changes.
+    pub reorder: u32,
     /// Russian roulette continuation probability (the paper: 0.8).
     pub rr_continue: f32,
     /// Which Russian roulette ends paths: the paper's fixed `rr_continue` (the default), or
@@ -207,6 +212,7 @@ impl Default for RenderOptions {
             seed: 1,
             size: None,
             compact: true,
+            reorder: 0,
             rr_continue: 0.8,
             roulette: crate::Roulette::Fixed,
             whole_group_end: None,
@@ -239,10 +245,12 @@ pub struct KernelTimes {
     /// The shadow pass of next-event estimation.
     pub shadow: Duration,
     pub compact: Duration,
+    /// Sorting the rays before the traversal (`RenderOptions::reorder`).
+    pub reorder: Duration,
 }
 impl KernelTimes {
     pub fn total(&self) -> Duration {
-        self.traverse + self.extend + self.shadow + self.compact
+        self.traverse + self.extend + self.shadow + self.compact + self.reorder
     }
     /// Adds `t` to the time of `stage`.
     fn add(&mut self, stage: Stage, t: Duration) {
@@ -251,6 +259,7 @@ impl KernelTimes {
             Stage::Extend => self.extend += t,
             Stage::Shadow => self.shadow += t,
             Stage::Compact => self.compact += t,
+            Stage::Reorder => self.reorder += t,
         }
     }
 }
@@ -259,6 +268,8 @@ impl KernelTimes {
 /// that timings are summed by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Stage {
+    /// Sort the live rays for the traversal (every `RenderOptions::reorder` iterations).
+    Reorder,
     /// Closest hit of every live ray.
     Traverse,
     /// Shade, sample lights and the next direction, end or continue paths.
@@ -328,6 +339,13 @@ struct Paths {
     shadow_d: GpuBuffer<Vec4>,
     nee: GpuBuffer<Vec4>,
     flags: GpuBuffer<u32>,
+    /// Ray reordering: the live slots in bin order (what the traversal reads instead of
+    /// `idrays` on a sorting iteration), each listed ray's bin, the histogram, and the grid
+    /// of origin cells over the scene's bounds.
+    sorted: GpuBuffer<u32>,
+    keys: GpuBuffer<u32>,
+    bins: GpuBuffer<u32>,
+    cells: GpuBuffer<Vec4>,
     count: GpuBuffer<u32>,
     block_sums: GpuBuffer<u32>,
     total: GpuBuffer<u32>,
@@ -466,6 +484,10 @@ impl<'d> Renderer<'d> {
             shadow_d: device.alloc(n)?,
             nee: device.alloc(n)?,
             flags: device.alloc(n)?,
+            sorted: device.alloc(n)?,
+            keys: device.alloc(n)?,
+            bins: device.alloc(reorder::HISTOGRAM_LEN)?,
+            cells: device.upload(&reorder::cells(gpu.bounds[0], gpu.bounds[1]))?,
             count: device.upload(&[n as u32])?,
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
@@ -731,6 +753,10 @@ impl<'d> Renderer<'d> {
             shadow: trace_shadow::spec(d, None),
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
+            bin_clear: bin_clear::spec(d, None),
+            bin_count: bin_count::spec(d, None),
+            bin_offsets: bin_offsets::spec(d, None),
+            bin_scatter: bin_scatter::spec(d, None),
         }
     }
 
@@ -761,6 +787,14 @@ impl<'d> Renderer<'d> {
         }
         if self.opts.compact {
             arts.extend(compact::artifacts(&specs.compact)?);
+        }
+        if self.opts.reorder > 0 {
+            arts.extend([
+                bin_clear::artifact(&specs.bin_clear)?,
+                bin_count::artifact(&specs.bin_count)?,
+                bin_offsets::artifact(&specs.bin_offsets)?,
+                bin_scatter::artifact(&specs.bin_scatter)?,
+            ]);
         }
         for a in &arts {
             d.prepare(a)?;
@@ -869,6 +903,7 @@ impl<'d> Renderer<'d> {
                         p,
                         run.cur,
                         self.opts.compact,
+                        self.opts.reorder,
                         &mut stages,
                     )?;
                 }
@@ -972,6 +1007,10 @@ struct Specs {
     shadow: cohort::Spec,
     shadow8: cohort::Spec,
     compact: compact::Specs,
+    bin_clear: cohort::Spec,
+    bin_count: cohort::Spec,
+    bin_offsets: cohort::Spec,
+    bin_scatter: cohort::Spec,
 }
 
 /// Records one iteration of the wavefront loop, stage by stage (PAPER.md §3): traverse,
@@ -986,11 +1025,21 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     p: &Paths,
     cur: usize,
     compact: bool,
+    reorder: u32,
     stages: &mut Vec<Stage>,
 ) -> Result<usize, RenderError> {
     let n = frame.slots;
     let mut record =
         |stage: Stage, dispatches: usize| stages.extend(std::iter::repeat_n(stage, dispatches));
+    // The traversal reads the live rays in bin order on a sorting iteration; every other
+    // kernel keeps the slot order of `idrays`.
+    let traced = if reorder > 0 && frame.iteration.is_multiple_of(reorder) {
+        record_reorder(b, specs, p, &p.idrays[cur], n)?;
+        record(Stage::Reorder, reorder::DISPATCHES);
+        &p.sorted
+    } else {
+        &p.idrays[cur]
+    };
     // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep for its stack.
     match &scene.nodes8 {
         Some(n8) => traverse8::record(
@@ -999,7 +1048,7 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             n,
             frame,
             &p.count,
-            &p.idrays[cur],
+            traced,
             &p.state,
             &p.ray_o,
             &p.ray_d,
@@ -1013,7 +1062,7 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             n,
             frame,
             &p.count,
-            &p.idrays[cur],
+            traced,
             &p.state,
             &p.ray_o,
             &p.ray_d,
@@ -1103,6 +1152,43 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     )?;
     record(Stage::Compact, compact::DISPATCHES);
     Ok(1 - cur)
+}
+
+/// Records the counting sort of the `count[0]` rays listed in `ids` into `p.sorted`
+/// (`cohort_kernels::reorder`), `n` slots.
+fn record_reorder(
+    b: &mut Batch<'_>,
+    specs: &Specs,
+    p: &Paths,
+    ids: &GpuBuffer<u32>,
+    n: u32,
+) -> Result<(), RenderError> {
+    bin_clear::record(b, &specs.bin_clear, reorder::HISTOGRAM_LEN as u32, &p.bins)?;
+    bin_count::record(
+        b,
+        &specs.bin_count,
+        n,
+        &p.count,
+        ids,
+        &p.state,
+        &p.ray_o,
+        &p.ray_d,
+        &p.cells,
+        &p.keys,
+        &p.bins,
+    )?;
+    bin_offsets::record(b, &specs.bin_offsets, 256u32, &p.bins)?;
+    bin_scatter::record(
+        b,
+        &specs.bin_scatter,
+        n,
+        &p.count,
+        ids,
+        &p.keys,
+        &p.bins,
+        &p.sorted,
+    )?;
+    Ok(())
 }
 
 /// Checks the options that do not depend on the scene, for an image of `w` x `h`.

@@ -85,6 +85,7 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::extend::{extend, init_paths};
     use cohort_kernels::integrator::{Implicit, NextEvent};
     use cohort_kernels::path_end::{EachPath, WholeGroup};
+    use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
     use cohort_kernels::traverse::{trace_shadow, traverse};
     use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
@@ -144,6 +145,31 @@ fn renderer_variants() -> Vec<variants::Variant> {
             &compact_scatter::INFO,
             Group::Thread,
             compact_scatter::build,
+        ),
+        // Ray reordering (`cohort render --reorder K`).
+        variant(
+            "bin_clear",
+            &bin_clear::INFO,
+            Group::Thread,
+            bin_clear::build,
+        ),
+        variant(
+            "bin_count",
+            &bin_count::INFO,
+            Group::Thread,
+            bin_count::build,
+        ),
+        variant(
+            "bin_offsets",
+            &bin_offsets::INFO,
+            Group::Thread,
+            bin_offsets::build,
+        ),
+        variant(
+            "bin_scatter",
+            &bin_scatter::INFO,
+            Group::Thread,
+            bin_scatter::build,
         ),
         // The viewer's tone mapping (`cohort view`).
         variant("display", &display::INFO, Group::Thread, display::build),

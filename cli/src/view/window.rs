@@ -287,6 +287,9 @@ impl App {
                 ms(k.shadow),
                 ms(k.compact)
             )));
+            if !k.reorder.is_zero() {
+                lines.push(Line::plain(format!(" ms: sort {:.0}", ms(k.reorder))));
+            }
         }
         lines.push(Line::plain(format!(
             "display kernel {:.2} ms per frame",
