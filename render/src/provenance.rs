@@ -107,7 +107,8 @@ pub struct Provenance {
     pub budget: String,
     /// `nee` or `path`.
     pub integrator: String,
-    /// Every other option that changes the image, as `name=value` words.
+    /// Every other option that changes the image, as `name=value` words (not `reorder`,
+    /// which changes only the traversal's order of rays).
     pub options: String,
     /// `exact`: merged shards are the unsplit render's image (per-path sampling under a
     /// paths budget); `statistical`: an unbiased estimate of it.
@@ -129,7 +130,7 @@ impl Provenance {
         };
         let options = format!(
             "algorithm={} in-patch={:?} n={} group-rr={} whole-group-end={} rr-continue={} roulette={} interleave={} coherent-glossy={} \
-             compact={} reorder={} coherent-light={} light-cells={}",
+             compact={} coherent-light={} light-cells={}",
             o.algorithm.name(),
             o.in_patch,
             o.patches_n,
@@ -140,7 +141,6 @@ impl Provenance {
             o.interleave,
             o.coherent_glossy,
             o.compact,
-            o.reorder,
             o.coherent_light,
             o.light_cells,
         );
