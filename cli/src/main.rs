@@ -385,8 +385,16 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let stats = combined_stats(&per_device);
     bar.finish_and_clear();
     let provenance = Provenance::of(&a.scene, (w, h), &opts, &device_names.join("; "));
-    output::write_exr(&a.out, &image, &provenance.to_attributes()).map_err(|e| e.to_string())?;
-    output::write_png(&a.png, &image, a.exposure).map_err(|e| e.to_string())?;
+    // The two files are encoded at once, on two threads: at 1024x1024 each takes a tenth
+    // of a second or more, as long as a short render itself (BENCHMARKS.md, session 17).
+    let attributes = provenance.to_attributes();
+    let (exr, png) = std::thread::scope(|threads| {
+        let png = threads.spawn(|| output::write_png(&a.png, &image, a.exposure));
+        let exr = output::write_exr(&a.out, &image, &attributes);
+        (exr, png.join().expect("the PNG writer panicked"))
+    });
+    exr.map_err(|e| e.to_string())?;
+    png.map_err(|e| e.to_string())?;
     let k = stats.kernel;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!(

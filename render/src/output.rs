@@ -106,6 +106,9 @@ pub fn write_png(path: &Path, img: &Image, stops: f32) -> Result<(), OutputError
         let mut enc = png::Encoder::new(std::io::BufWriter::new(file), img.width, img.height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        // fdeflate: several times faster than the default level, for a file a few percent
+        // larger (6 % on the Cornell box; the EXR is the exact image, the PNG is for viewing).
+        enc.set_compression(png::Compression::Fast);
         let mut writer = enc.write_header().map_err(|e| e.to_string())?;
         let data: Vec<u8> = img
             .pixels
