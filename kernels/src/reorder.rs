@@ -3,7 +3,7 @@
 //! the direction octant and then the Morton code of the origin's cell in an 8x8x8 grid over
 //! the scene's bounds. Four dispatches ([`DISPATCHES`]): [`bin_clear`], [`bin_count`] (key
 //! and histogram by atomics), [`bin_offsets`] (one workgroup's exclusive scan),
-//! [`bin_scatter`]. The result is a permutation of `idrays[..count]` that only the
+//! [`bin_scatter`], recorded in order by [`record`]. The result is a permutation of `idrays[..count]` that only the
 //! traversal reads: every other kernel keeps the slot order, so the path state stays
 //! coalesced, and the image is the same bit for bit (a ray's hit does not depend on the
 //! invocation that traces it). Slots whose path is done go to an extra last bin, so that
@@ -141,4 +141,83 @@ pub fn cells(lo: Vec3, hi: Vec3) -> [Vec4; 2] {
         lo.extend(0.0),
         (8.0 / (hi - lo).max(Vec3::splat(1e-20))).extend(0.0),
     ]
+}
+
+/// The four kernels' specialisations for a device.
+pub struct Specs {
+    pub clear: cohort::Spec,
+    pub count: cohort::Spec,
+    pub offsets: cohort::Spec,
+    pub scatter: cohort::Spec,
+}
+
+pub fn specs(device: &cohort::runtime::Device) -> Specs {
+    Specs {
+        clear: bin_clear::spec(device, None),
+        count: bin_count::spec(device, None),
+        offsets: bin_offsets::spec(device, None),
+        scatter: bin_scatter::spec(device, None),
+    }
+}
+
+/// The four kernels' compiled artifacts (to prepare their pipelines ahead of use).
+pub fn artifacts(
+    specs: &Specs,
+) -> Result<Vec<std::sync::Arc<cohort::runtime::KernelArtifact>>, cohort::emit::CompileError> {
+    Ok(vec![
+        bin_clear::artifact(&specs.clear)?,
+        bin_count::artifact(&specs.count)?,
+        bin_offsets::artifact(&specs.offsets)?,
+        bin_scatter::artifact(&specs.scatter)?,
+    ])
+}
+
+/// Where a sort works: `keys` and `sorted` of `n` elements, `bins` of
+/// [`HISTOGRAM_LEN`], and `cells` from [`cells`].
+pub struct SortBuffers<'a> {
+    pub cells: &'a cohort::runtime::GpuBuffer<Vec4>,
+    pub keys: &'a cohort::runtime::GpuBuffer<u32>,
+    pub bins: &'a cohort::runtime::GpuBuffer<u32>,
+    pub sorted: &'a cohort::runtime::GpuBuffer<u32>,
+}
+
+/// Records the sort of the `count[0] <= n` rays listed in `idrays` into `buf.sorted`:
+/// [`DISPATCHES`] dispatches, in order.
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    batch: &mut cohort::runtime::Batch<'_>,
+    specs: &Specs,
+    n: u32,
+    count: &cohort::runtime::GpuBuffer<u32>,
+    idrays: &cohort::runtime::GpuBuffer<u32>,
+    state: &cohort::runtime::GpuBuffer<UVec4>,
+    ray_o: &cohort::runtime::GpuBuffer<Vec4>,
+    ray_d: &cohort::runtime::GpuBuffer<Vec4>,
+    buf: &SortBuffers<'_>,
+) -> cohort::Result<()> {
+    bin_clear::record(batch, &specs.clear, HISTOGRAM_LEN as u32, buf.bins)?;
+    bin_count::record(
+        batch,
+        &specs.count,
+        n,
+        count,
+        idrays,
+        state,
+        ray_o,
+        ray_d,
+        buf.cells,
+        buf.keys,
+        buf.bins,
+    )?;
+    bin_offsets::record(batch, &specs.offsets, 256u32, buf.bins)?;
+    bin_scatter::record(
+        batch,
+        &specs.scatter,
+        n,
+        count,
+        idrays,
+        buf.keys,
+        buf.bins,
+        buf.sorted,
+    )
 }

@@ -28,7 +28,7 @@ mod common;
 use cohort::prelude::*;
 use cohort::runtime::{BackendKind, Device, GpuBuffer};
 use cohort_kernels::layout::{Frame, Triangle, MISS};
-use cohort_kernels::reorder::{self, bin_clear, bin_count, bin_offsets, bin_scatter};
+use cohort_kernels::reorder;
 use cohort_kernels::traverse::{dominant_axis, leaf_hits, rotate};
 use cohort_kernels::traverse_wide::{
     hit4, permute8, pick, trace8, traverse8, AnyHit, Closest, WideNode, STACK_SIZE,
@@ -363,20 +363,15 @@ fn bench_scene(d: &Device, name: &str) {
         let keys = d.alloc::<u32>(n as usize).unwrap();
         let bins = d.alloc::<u32>(reorder::HISTOGRAM_LEN).unwrap();
         let sorted = d.alloc::<u32>(n as usize).unwrap();
-        let (zs, cs, os, ss) = (
-            bin_clear::spec(d, None),
-            bin_count::spec(d, None),
-            bin_offsets::spec(d, None),
-            bin_scatter::spec(d, None),
-        );
+        let specs = reorder::specs(d);
+        let buffers = reorder::SortBuffers {
+            cells: &grid,
+            keys: &keys,
+            bins: &bins,
+            sorted: &sorted,
+        };
         let record_sort = |b: &mut cohort::runtime::Batch| {
-            bin_clear::record(b, &zs, reorder::HISTOGRAM_LEN as u32, &bins).unwrap();
-            bin_count::record(
-                b, &cs, n, &count, &ids, &state, &ob, &db, &grid, &keys, &bins,
-            )
-            .unwrap();
-            bin_offsets::record(b, &os, 256u32, &bins).unwrap();
-            bin_scatter::record(b, &ss, n, &count, &ids, &keys, &bins, &sorted).unwrap();
+            reorder::record(b, &specs, n, &count, &ids, &state, &ob, &db, &buffers).unwrap();
         };
         let t_id = |ids: &Buf<u32>| -> f64 {
             median_ns(d, reps, |b| {

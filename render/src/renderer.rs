@@ -20,7 +20,7 @@ use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
-use cohort_kernels::reorder::{self, bin_clear, bin_count, bin_offsets, bin_scatter};
+use cohort_kernels::reorder;
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
 };
@@ -339,13 +339,8 @@ struct Paths {
     shadow_d: GpuBuffer<Vec4>,
     nee: GpuBuffer<Vec4>,
     flags: GpuBuffer<u32>,
-    /// Ray reordering: the live slots in bin order (what the traversal reads instead of
-    /// `idrays` on a sorting iteration), each listed ray's bin, the histogram, and the grid
-    /// of origin cells over the scene's bounds.
-    sorted: GpuBuffer<u32>,
-    keys: GpuBuffer<u32>,
-    bins: GpuBuffer<u32>,
-    cells: GpuBuffer<Vec4>,
+    /// Ray reordering's buffers, allocated by the first run that sorts.
+    sort: Option<SortState>,
     count: GpuBuffer<u32>,
     block_sums: GpuBuffer<u32>,
     total: GpuBuffer<u32>,
@@ -484,10 +479,7 @@ impl<'d> Renderer<'d> {
             shadow_d: device.alloc(n)?,
             nee: device.alloc(n)?,
             flags: device.alloc(n)?,
-            sorted: device.alloc(n)?,
-            keys: device.alloc(n)?,
-            bins: device.alloc(reorder::HISTOGRAM_LEN)?,
-            cells: device.upload(&reorder::cells(gpu.bounds[0], gpu.bounds[1]))?,
+            sort: None,
             count: device.upload(&[n as u32])?,
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
@@ -753,10 +745,7 @@ impl<'d> Renderer<'d> {
             shadow: trace_shadow::spec(d, None),
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
-            bin_clear: bin_clear::spec(d, None),
-            bin_count: bin_count::spec(d, None),
-            bin_offsets: bin_offsets::spec(d, None),
-            bin_scatter: bin_scatter::spec(d, None),
+            reorder: reorder::specs(d),
         }
     }
 
@@ -789,12 +778,10 @@ impl<'d> Renderer<'d> {
             arts.extend(compact::artifacts(&specs.compact)?);
         }
         if self.opts.reorder > 0 {
-            arts.extend([
-                bin_clear::artifact(&specs.bin_clear)?,
-                bin_count::artifact(&specs.bin_count)?,
-                bin_offsets::artifact(&specs.bin_offsets)?,
-                bin_scatter::artifact(&specs.bin_scatter)?,
-            ]);
+            arts.extend(reorder::artifacts(&specs.reorder)?);
+            if self.paths.sort.is_none() {
+                self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
+            }
         }
         for a in &arts {
             d.prepare(a)?;
@@ -1007,10 +994,7 @@ struct Specs {
     shadow: cohort::Spec,
     shadow8: cohort::Spec,
     compact: compact::Specs,
-    bin_clear: cohort::Spec,
-    bin_count: cohort::Spec,
-    bin_offsets: cohort::Spec,
-    bin_scatter: cohort::Spec,
+    reorder: reorder::Specs,
 }
 
 /// Records one iteration of the wavefront loop, stage by stage (PAPER.md §3): traverse,
@@ -1033,12 +1017,25 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         |stage: Stage, dispatches: usize| stages.extend(std::iter::repeat_n(stage, dispatches));
     // The traversal reads the live rays in bin order on a sorting iteration; every other
     // kernel keeps the slot order of `idrays`.
-    let traced = if reorder > 0 && frame.iteration.is_multiple_of(reorder) {
-        record_reorder(b, specs, p, &p.idrays[cur], n)?;
-        record(Stage::Reorder, reorder::DISPATCHES);
-        &p.sorted
-    } else {
-        &p.idrays[cur]
+    let sorting = reorder > 0 && frame.iteration.is_multiple_of(reorder);
+    let traced = match p.sort.as_ref().filter(|_| sorting) {
+        Some(sort) => {
+            let buffers = sort.buffers();
+            reorder::record(
+                b,
+                &specs.reorder,
+                n,
+                &p.count,
+                &p.idrays[cur],
+                &p.state,
+                &p.ray_o,
+                &p.ray_d,
+                &buffers,
+            )?;
+            record(Stage::Reorder, reorder::DISPATCHES);
+            &sort.sorted
+        }
+        None => &p.idrays[cur],
     };
     // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep for its stack.
     match &scene.nodes8 {
@@ -1154,41 +1151,34 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     Ok(1 - cur)
 }
 
-/// Records the counting sort of the `count[0]` rays listed in `ids` into `p.sorted`
-/// (`cohort_kernels::reorder`), `n` slots.
-fn record_reorder(
-    b: &mut Batch<'_>,
-    specs: &Specs,
-    p: &Paths,
-    ids: &GpuBuffer<u32>,
-    n: u32,
-) -> Result<(), RenderError> {
-    bin_clear::record(b, &specs.bin_clear, reorder::HISTOGRAM_LEN as u32, &p.bins)?;
-    bin_count::record(
-        b,
-        &specs.bin_count,
-        n,
-        &p.count,
-        ids,
-        &p.state,
-        &p.ray_o,
-        &p.ray_d,
-        &p.cells,
-        &p.keys,
-        &p.bins,
-    )?;
-    bin_offsets::record(b, &specs.bin_offsets, 256u32, &p.bins)?;
-    bin_scatter::record(
-        b,
-        &specs.bin_scatter,
-        n,
-        &p.count,
-        ids,
-        &p.keys,
-        &p.bins,
-        &p.sorted,
-    )?;
-    Ok(())
+/// Ray reordering's buffers (`cohort_kernels::reorder::SortBuffers`): the grid of origin
+/// cells over the scene's bounds, each listed ray's bin, the histogram, and the live slots
+/// in bin order (what the traversal reads instead of `idrays` on a sorting iteration).
+struct SortState {
+    cells: GpuBuffer<Vec4>,
+    keys: GpuBuffer<u32>,
+    bins: GpuBuffer<u32>,
+    sorted: GpuBuffer<u32>,
+}
+
+impl SortState {
+    fn new(d: &Device, slots: u32, scene: &GpuScene) -> Result<SortState, RenderError> {
+        Ok(SortState {
+            cells: d.upload(&reorder::cells(scene.bounds[0], scene.bounds[1]))?,
+            keys: d.alloc(slots as usize)?,
+            bins: d.alloc(reorder::HISTOGRAM_LEN)?,
+            sorted: d.alloc(slots as usize)?,
+        })
+    }
+
+    fn buffers(&self) -> reorder::SortBuffers<'_> {
+        reorder::SortBuffers {
+            cells: &self.cells,
+            keys: &self.keys,
+            bins: &self.bins,
+            sorted: &self.sorted,
+        }
+    }
 }
 
 /// Checks the options that do not depend on the scene, for an image of `w` x `h`.

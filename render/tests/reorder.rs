@@ -4,9 +4,7 @@
 
 use cohort::runtime::{BackendKind, Device};
 use cohort_kernels::layout::DONE;
-use cohort_kernels::reorder::{
-    self, bin_clear, bin_count, bin_key, bin_offsets, bin_scatter, BINS,
-};
+use cohort_kernels::reorder::{self, bin_key, BINS};
 use cohort_render::{Algorithm, Budget, IntegratorKind, RenderOptions, Renderer};
 use glam::{UVec4, Vec3};
 
@@ -76,37 +74,21 @@ fn the_sort_lists_every_ray_once_in_bin_order() {
         let bins_b = dev.upload(&vec![7u32; reorder::HISTOGRAM_LEN]).unwrap();
         let sorted_b = dev.upload(&vec![u32::MAX; slots as usize]).unwrap();
         let mut b = dev.batch();
-        bin_clear::record(
+        reorder::record(
             &mut b,
-            &bin_clear::spec(&dev, None),
-            reorder::HISTOGRAM_LEN as u32,
-            &bins_b,
-        )
-        .unwrap();
-        bin_count::record(
-            &mut b,
-            &bin_count::spec(&dev, None),
+            &reorder::specs(&dev),
             slots,
             &count_b,
             &ids_b,
             &state_b,
             &o_b,
             &d_b,
-            &cells_b,
-            &keys_b,
-            &bins_b,
-        )
-        .unwrap();
-        bin_offsets::record(&mut b, &bin_offsets::spec(&dev, None), 256u32, &bins_b).unwrap();
-        bin_scatter::record(
-            &mut b,
-            &bin_scatter::spec(&dev, None),
-            slots,
-            &count_b,
-            &ids_b,
-            &keys_b,
-            &bins_b,
-            &sorted_b,
+            &reorder::SortBuffers {
+                cells: &cells_b,
+                keys: &keys_b,
+                bins: &bins_b,
+                sorted: &sorted_b,
+            },
         )
         .unwrap();
         b.submit().unwrap();
