@@ -24,7 +24,7 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, Comp
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug)]
 pub struct HostEntry {
-    pub invoke: fn(&cohort_runtime::cpu::LaneArgs<'_>),
+    pub invoke: cohort_runtime::cpu::Invoke,
     pub workgroup_vars: fn() -> Vec<(usize, usize)>,
 }
 

@@ -267,8 +267,6 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 #[allow(clippy::too_many_arguments)]
 pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     #[builtin(global_index)] gi: u32,
-    #[builtin(local_index)] li: u32,
-    #[workgroup] wg_done: &mut [AtomicU32; 2],
     f: &Frame,
     count: &[u32],
     idrays: &[u32],
@@ -316,13 +314,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             f.light_cells,
         )
     });
-    // Completed paths are counted per workgroup and added to the global counters once
-    // per workgroup: one global atomic per path serialised on a single address.
-    if li == 0 {
-        wg_done[0].store(0, Ordering::Relaxed);
-        wg_done[1].store(0, Ordering::Relaxed);
-    }
-    workgroup_barrier();
     // Phase 1: shade and decide per path. What phase 2 needs outlives the branch, because
     // the group may vote in between, which every invocation must reach.
     let i = gi as usize;
@@ -923,12 +914,16 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 accum[r] = accum[r] + l.extend(1.0);
                 radiance[r] = Vec4::ZERO;
             }
-            wg_done[0].fetch_add(1, Ordering::Relaxed);
+            // One global atomic per ended path, not a per-workgroup count: without its
+            // two workgroup barriers the kernel synchronises only where its group level
+            // asks, so the CPU backend runs it as a plain loop (1.6-2x its paths/s),
+            // while extend's time on an H200 did not change (BENCHMARKS.md, session 18).
+            completed[0].fetch_add(1, Ordering::Relaxed);
             let next = path + 1;
             let mut done = 0u32;
             if f.paths_per_pixel != 0 && next - f.first_path >= f.paths_per_pixel {
                 done = DONE;
-                wg_done[1].fetch_add(1, Ordering::Relaxed);
+                completed[1].fetch_add(1, Ordering::Relaxed);
             }
             let key = stream(f.seed, pixel, next, 0);
             let fs = film_sample(f, film_filter, pixel, key);
@@ -944,17 +939,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             nee[r] = ld.extend(0.0);
             shadow_o[r] = sh_o;
             shadow_d[r] = sh_d.extend(if alive { SLOT_CONTINUES } else { SLOT_ENDED });
-        }
-    }
-    workgroup_barrier();
-    if li == 0 {
-        let c = wg_done[0].load(Ordering::Relaxed);
-        if c > 0 {
-            completed[0].fetch_add(c, Ordering::Relaxed);
-        }
-        let c1 = wg_done[1].load(Ordering::Relaxed);
-        if c1 > 0 {
-            completed[1].fetch_add(c1, Ordering::Relaxed);
         }
     }
 }

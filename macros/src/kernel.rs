@@ -462,9 +462,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 })
             }
 
-            /// Runs one invocation on the CPU backend.
+            /// Runs the invocations `lanes` names on the CPU backend, with the buffers
+            /// bound once.
             #[doc(hidden)]
-            pub fn __cpu_invoke #generics (a: &::cohort::runtime::cpu::LaneArgs<'_>) #where_static {
+            pub fn __cpu_invoke #generics (a: &::cohort::runtime::cpu::LaneArgs<'_>, lanes: &::cohort::runtime::cpu::Lanes<'_>) #where_static {
                 #cpu_invoke
             }
 
@@ -568,6 +569,14 @@ fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStr
     let mut call_args = Vec::new();
     let mut vars = Vec::new();
     let (mut buffer, mut workgroup) = (0usize, 0usize);
+    // Buffers and workgroup memory are bound once per call (`binds`), before the loop
+    // over the invocations it runs; builtins are read per invocation.
+    let mut binds = Vec::new();
+    fn bind(binds: &mut Vec<TokenStream>, value: TokenStream) -> TokenStream {
+        let local = format_ident!("__cohort_p{}", binds.len());
+        binds.push(quote!(let #local = #value;));
+        quote!(#local)
+    }
     for (arg, p) in copy.sig.inputs.iter_mut().zip(params) {
         let FnArg::Typed(pt) = arg else { continue };
         let name = &p.name;
@@ -575,25 +584,25 @@ fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStr
         match &p.kind {
             ParamKind::Builtin(b) => {
                 if UVEC3_BUILTINS.contains(&b.to_string().as_str()) {
-                    call_args.push(quote!(::cohort::glam::UVec3::from_array(a.b.#b)));
+                    call_args.push(quote!(::cohort::glam::UVec3::from_array(__cohort_b.#b)));
                 } else {
-                    call_args.push(quote!(a.b.#b));
+                    call_args.push(quote!(__cohort_b.#b));
                 }
             }
             ParamKind::Storage { elem, .. } => {
                 if mutable_ref {
-                    call_args.push(quote!(a.storage_mut::<#elem>(#buffer)));
+                    call_args.push(bind(&mut binds, quote!(a.storage_mut::<#elem>(#buffer))));
                 } else {
-                    call_args.push(quote!(a.storage::<#elem>(#buffer)));
+                    call_args.push(bind(&mut binds, quote!(a.storage::<#elem>(#buffer))));
                 }
                 buffer += 1;
             }
             ParamKind::Uniform(t) => {
-                call_args.push(quote!(a.uniform::<#t>(#buffer)));
+                call_args.push(bind(&mut binds, quote!(a.uniform::<#t>(#buffer))));
                 buffer += 1;
             }
             ParamKind::Workgroup(t) => {
-                call_args.push(quote!(a.workgroup::<#t>(#workgroup)));
+                call_args.push(bind(&mut binds, quote!(a.workgroup::<#t>(#workgroup))));
                 vars.push(quote!((::core::mem::size_of::<#t>(), ::core::mem::align_of::<#t>())));
                 workgroup += 1;
             }
@@ -623,7 +632,13 @@ fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStr
     let invoke = quote! {
         // SAFETY: the CPU backend binds the buffers the launch functions passed, in
         // parameter order, and workgroup memory laid out by `__cpu_workgroup_vars`.
-        unsafe { super::#copy_name #turbofish (#(#call_args),*) }
+        unsafe {
+            #(#binds)*
+            for __cohort_local in lanes.range() {
+                let __cohort_b = lanes.enter(__cohort_local);
+                super::#copy_name #turbofish (#(#call_args),*)
+            }
+        }
     };
     let vars = quote!(::std::vec![#(#vars),*]);
     (copy.into_token_stream(), invoke, vars)

@@ -97,11 +97,70 @@ impl Shared {
 
 /// The running invocation, reachable from its thread.
 struct LaneCtx {
-    lane: Lane,
+    /// Set per invocation where one context serves a workgroup's lanes in turn.
+    lane: Cell<Lane>,
     subgroup: u32,
     /// Null while the kernel runs without coroutines.
     yielder: Cell<*const Yielder<(), Park>>,
     shared: *const Shared,
+}
+
+/// The invocations one call of a kernel's host form runs: consecutive local indices of
+/// one workgroup. The generated code asks for each lane's builtins as it runs it
+/// ([`enter`](Self::enter)); inlined there, only the builtins the kernel reads are computed.
+#[doc(hidden)]
+pub struct Lanes<'a> {
+    range: std::ops::Range<u32>,
+    workgroup: u32,
+    workgroup_id: [u32; 3],
+    num_workgroups: [u32; 3],
+    workgroup_size: u32,
+    level: GroupLevel,
+    /// The context `lane()` and the sync points read: set to each lane as it enters.
+    ctx: &'a LaneCtx,
+}
+
+impl Lanes<'_> {
+    /// The local indices to run, in order.
+    #[inline]
+    pub fn range(&self) -> std::ops::Range<u32> {
+        self.range.clone()
+    }
+
+    /// Makes invocation `local` the running lane, and returns its builtins.
+    #[inline]
+    pub fn enter(&self, local: u32) -> Builtins {
+        let n = self.workgroup_size;
+        let global = self.workgroup.wrapping_mul(n).wrapping_add(local);
+        let wid = self.workgroup_id;
+        let group = match self.level {
+            GroupLevel::Thread => global,
+            GroupLevel::Warp => global / SUBGROUP_WIDTH,
+            GroupLevel::Block => self.workgroup,
+            GroupLevel::Grid => 0,
+        };
+        let b = Builtins {
+            global_index: global,
+            local_index: local,
+            workgroup_index: self.workgroup,
+            global_id: [wid[0].wrapping_mul(n).wrapping_add(local), wid[1], wid[2]],
+            local_id: [local, 0, 0],
+            workgroup_id: wid,
+            num_workgroups: self.num_workgroups,
+            workgroup_size: n,
+            subgroup_size: SUBGROUP_WIDTH,
+            subgroup_lane: local % SUBGROUP_WIDTH,
+            subgroup_id: local / SUBGROUP_WIDTH,
+            num_subgroups: n.div_ceil(SUBGROUP_WIDTH),
+        };
+        self.ctx.lane.set(Lane {
+            level: self.level,
+            group,
+            local_index: local,
+            subgroup_lane: b.subgroup_lane,
+        });
+        b
+    }
 }
 
 thread_local! {
@@ -134,7 +193,7 @@ pub struct Lane {
 pub fn lane() -> Option<Lane> {
     let p = CURRENT.with(|c| c.get());
     // SAFETY: set only while the context it points to is alive.
-    (!p.is_null()).then(|| unsafe { (*p).lane })
+    (!p.is_null()).then(|| unsafe { (*p).lane.get() })
 }
 
 /// The values the lanes of one release posted, as the lane reading them sees them.
@@ -199,7 +258,8 @@ pub fn exchange<T: Copy, R>(
     );
     // SAFETY: the shared area outlives the workgroup's lanes.
     let shared = unsafe { &*ctx.shared };
-    let l = ctx.lane.local_index as usize;
+    let me = ctx.lane.get();
+    let l = me.local_index as usize;
     if let Some(v) = value {
         // SAFETY: only this lane writes its slot, and only while the others are parked.
         unsafe { (shared.posted[l].get() as *mut T).write(v) };
@@ -216,10 +276,10 @@ pub fn exchange<T: Copy, R>(
             (
                 first,
                 SUBGROUP_WIDTH.min(shared.workgroup_size - first),
-                ctx.lane.subgroup_lane,
+                me.subgroup_lane,
             )
         }
-        Scope::Workgroup => (0, shared.workgroup_size, ctx.lane.local_index),
+        Scope::Workgroup => (0, shared.workgroup_size, me.local_index),
     };
     Some(read(&View {
         shared,
@@ -310,58 +370,44 @@ pub(crate) fn run_workgroup(launch: &Launch<'_>, linear: u32, scratch: &mut Scra
         .iter()
         .map(|&o| unsafe { base.add(o) })
         .collect();
-    let builtins = |local: u32| {
-        let global = linear.wrapping_mul(n).wrapping_add(local);
-        Builtins {
-            global_index: global,
-            local_index: local,
-            workgroup_index: linear,
-            global_id: [wid[0].wrapping_mul(n).wrapping_add(local), wid[1], wid[2]],
-            local_id: [local, 0, 0],
-            workgroup_id: wid,
-            num_workgroups: launch.num_workgroups,
-            workgroup_size: n,
-            subgroup_size: SUBGROUP_WIDTH,
-            subgroup_lane: local % SUBGROUP_WIDTH,
-            subgroup_id: local / SUBGROUP_WIDTH,
-            num_subgroups: n.div_ceil(SUBGROUP_WIDTH),
-        }
-    };
-    let group = |b: &Builtins| match launch.kernel.group {
-        GroupLevel::Thread => b.global_index,
-        GroupLevel::Warp => b.global_index / crate::cpu::SUBGROUP_WIDTH,
-        GroupLevel::Block => b.workgroup_index,
-        GroupLevel::Grid => 0,
-    };
     if scratch.shared.posted.len() < n as usize {
         scratch.shared = Shared::new(n as usize);
     }
     scratch.shared.workgroup_size = n;
     let shared: *const Shared = &scratch.shared;
-    let ctx_of = |b: &Builtins| LaneCtx {
-        lane: Lane {
+    let lanes = |range: std::ops::Range<u32>, ctx| Lanes {
+        range,
+        workgroup: linear,
+        workgroup_id: wid,
+        num_workgroups: launch.num_workgroups,
+        workgroup_size: n,
+        level: launch.kernel.group,
+        ctx,
+    };
+    let ctx_of = |local: u32| LaneCtx {
+        lane: Cell::new(Lane {
             level: launch.kernel.group,
-            group: group(b),
-            local_index: b.local_index,
-            subgroup_lane: b.subgroup_lane,
-        },
-        subgroup: b.subgroup_id,
+            group: 0,
+            local_index: local,
+            subgroup_lane: local % SUBGROUP_WIDTH,
+        }),
+        subgroup: local / SUBGROUP_WIDTH,
         yielder: Cell::new(std::ptr::null()),
         shared,
     };
     let _clear = ClearCurrent;
 
+    let args = LaneArgs {
+        bufs: launch.bufs,
+        workgroup: &workgroup,
+    };
     if !launch.kernel.synchronises {
-        for local in 0..n {
-            let b = builtins(local);
-            let ctx = ctx_of(&b);
-            CURRENT.with(|c| c.set(&ctx));
-            (launch.kernel.invoke)(&LaneArgs {
-                b,
-                bufs: launch.bufs,
-                workgroup: &workgroup,
-            });
-        }
+        // One call for the whole workgroup, the lanes one after another: the buffers are
+        // bound once, and one context follows the running lane (no subgroup field is read
+        // without sync points).
+        let ctx = ctx_of(0);
+        CURRENT.with(|c| c.set(&ctx));
+        (launch.kernel.invoke)(&args, &lanes(0..n, &ctx));
         return;
     }
 
@@ -370,30 +416,25 @@ pub(crate) fn run_workgroup(launch: &Launch<'_>, linear: u32, scratch: &mut Scra
             DefaultStack::new(STACK_BYTES).expect("the CPU backend could not map a lane stack"),
         );
     }
-    let (ctxs, args): (Vec<LaneCtx>, Vec<LaneArgs<'_>>) = (0..n)
-        .map(|l| {
-            let b = builtins(l);
-            let ctx = ctx_of(&b);
-            let args = LaneArgs {
-                b,
-                bufs: launch.bufs,
-                workgroup: &workgroup,
-            };
-            (ctx, args)
-        })
-        .unzip();
+    let ctxs: Vec<LaneCtx> = (0..n).map(ctx_of).collect();
+    let one_lane: Vec<Lanes<'_>> = ctxs
+        .iter()
+        .enumerate()
+        .map(|(l, ctx)| lanes(l as u32..l as u32 + 1, ctx))
+        .collect();
     let invoke = launch.kernel.invoke;
+    let args = &args;
     let mut lanes: Vec<_> = scratch
         .stacks
         .iter_mut()
-        .zip(ctxs.iter().zip(&args))
-        .map(|(stack, (ctx, a))| {
-            // SAFETY: the coroutine borrows `ctx` and `a`, which outlive it (it is dropped
-            // at the end of this function, before them).
+        .zip(ctxs.iter().zip(&one_lane))
+        .map(|(stack, (ctx, lane))| {
+            // SAFETY: the coroutine borrows `ctx`, `lane` and `args`, which outlive it (it
+            // is dropped at the end of this function, before them).
             unsafe {
                 Coroutine::with_stack_unchecked(stack, move |y: &Yielder<(), Park>, ()| {
                     ctx.yielder.set(y);
-                    invoke(a)
+                    invoke(args, lane)
                 })
             }
         })

@@ -16,7 +16,7 @@
 
 mod lanes;
 
-pub use lanes::{exchange, lane, Lane, Scope, View};
+pub use lanes::{exchange, lane, Lane, Lanes, Scope, View};
 pub(crate) use lanes::{run_workgroup, Launch, Scratch};
 
 /// The subgroup width the CPU backend gives kernels (the width of an NVIDIA warp, so that
@@ -37,9 +37,9 @@ pub enum GroupLevel {
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug)]
 pub struct HostKernel {
-    /// Runs one invocation: the kernel's own function with the lane's builtins, buffers
-    /// and workgroup memory.
-    pub invoke: fn(&LaneArgs<'_>),
+    /// Runs invocations: the kernel's own function with the buffers and workgroup memory
+    /// of `LaneArgs`, bound once, for each lane of `Lanes`.
+    pub invoke: Invoke,
     /// Size and alignment of each `#[workgroup]` parameter, in parameter order.
     pub workgroup_vars: fn() -> Vec<(usize, usize)>,
     pub group: GroupLevel,
@@ -78,11 +78,15 @@ pub struct HostBuf {
 unsafe impl Send for HostBuf {}
 unsafe impl Sync for HostBuf {}
 
-/// What one invocation is called with. The buffers are the kernel's storage and uniform
+/// A kernel's host form as the CPU backend calls it: the invocations `Lanes` names, in
+/// order, with the dispatch's buffers and the workgroup's memory.
+#[doc(hidden)]
+pub type Invoke = fn(&LaneArgs<'_>, &Lanes<'_>);
+
+/// What invocations are called with. The buffers are the kernel's storage and uniform
 /// parameters in parameter order (not the generated `__lengths` or `group_share` bindings).
 #[doc(hidden)]
 pub struct LaneArgs<'a> {
-    pub b: Builtins,
     pub(crate) bufs: &'a [HostBuf],
     pub(crate) workgroup: &'a [*mut u8],
 }
