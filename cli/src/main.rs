@@ -470,13 +470,14 @@ fn render(a: RenderArgs) -> Result<(), String> {
             ms(stats.host.wait)
         );
         println!(
-            "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3}",
+            "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3} (shading {})",
             ready.as_secs_f64(),
             scene_loaded.as_secs_f64(),
             (device_opened - scene_loaded).as_secs_f64(),
             startup.bvh_build.as_secs_f64(),
             startup.upload.as_secs_f64(),
-            startup.pipelines.as_secs_f64()
+            startup.pipelines.as_secs_f64(),
+            cohort_render::shading::label(startup.shading)
         );
     } else {
         // Kernel times are summed over devices; the wall time is the slowest device's.
@@ -508,6 +509,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
             "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": scene_loaded.as_secs_f64(), "device": (device_opened - scene_loaded).as_secs_f64(),
                 "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64() },
+            "shading": cohort_render::shading::label(startup.shading),
             "scene_integrator": {
                 "max_depth": scene.integrator.max_depth, "rr_depth": scene.integrator.rr_depth,
                 "hide_emitters": scene.integrator.hide_emitters,

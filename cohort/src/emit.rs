@@ -45,6 +45,7 @@ pub fn compile_with_host(
             Group::Grid => GroupLevel::Grid,
         },
         synchronises: compiled.synchronises,
+        constants: compiled.spec.constants,
     });
     Ok(KernelArtifact::compiled(Arc::new(compiled), host))
 }

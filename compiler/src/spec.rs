@@ -92,9 +92,16 @@ pub struct Spec {
     /// layout, bound as storage. For drivers where a uniform buffer costs more than its
     /// reads ([`Target::uniforms_as_storage`]).
     pub uniforms_as_storage: bool,
+    /// The values of the kernel's `#[specialize]` parameters, in parameter order (the
+    /// rest 0). They are literals in the built module, so that every branch they decide
+    /// is left out of it (docs/LANGUAGE.md, "Specialisation constants").
+    pub constants: [u32; MAX_CONSTANTS],
 }
 
 pub const WARP: u32 = 32;
+
+/// How many `#[specialize]` parameters one kernel may have.
+pub const MAX_CONSTANTS: usize = 4;
 
 impl Spec {
     /// A device-independent specialisation: warps go through workgroup memory.
@@ -109,7 +116,20 @@ impl Spec {
             warp_via_subgroup: false,
             required_subgroup_size: None,
             uniforms_as_storage: false,
+            constants: [0; MAX_CONSTANTS],
         }
+    }
+
+    /// This specialisation with its `#[specialize]` parameters set to `values` (the
+    /// launch functions that `#[kernel]` generates call it with their arguments).
+    pub fn with_constants(mut self, values: &[u32]) -> Spec {
+        assert!(
+            values.len() <= MAX_CONSTANTS,
+            "a kernel has at most {MAX_CONSTANTS} #[specialize] parameters"
+        );
+        self.constants = [0; MAX_CONSTANTS];
+        self.constants[..values.len()].copy_from_slice(values);
+        self
     }
 
     /// The best specialisation for `device`: warps use subgroup broadcasts where the
@@ -148,6 +168,11 @@ impl Spec {
         }
         if self.uniforms_as_storage {
             s.push_str("_ustorage");
+        }
+        for (i, c) in self.constants.iter().enumerate() {
+            if *c != 0 {
+                s.push_str(&format!("_c{i}x{c:x}"));
+            }
         }
         s
     }

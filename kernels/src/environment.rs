@@ -9,6 +9,7 @@
 //!   cell by inverting its bilinear density).
 
 use crate::layout::*;
+use crate::shading::SHADES_ENV_MAP;
 use cohort::prelude::*;
 
 /// Entries of the map's header in the textures array (`cohort_scenes::environment_map`).
@@ -154,10 +155,11 @@ pub fn env_map_sample(textures: &[Vec4], base: u32, u: Vec2) -> Vec4 {
 }
 
 /// Radiance of the environment arriving along direction `d` (a ray leaving the scene).
+/// `shading`: the scene's set (`crate::shading`); the map is read where it has one.
 #[kernel_fn]
-pub fn environment_radiance(f: &Frame, textures: &[Vec4], d: Vec3) -> Vec3 {
+pub fn environment_radiance(shading: u32, f: &Frame, textures: &[Vec4], d: Vec3) -> Vec3 {
     let mut r = f.environment;
-    if f.env_map != 0 {
+    if shading & SHADES_ENV_MAP != 0 && f.env_map != 0 {
         r = env_map_radiance(textures, f.env_map - 1, d);
     }
     r
@@ -167,8 +169,8 @@ pub fn environment_radiance(f: &Frame, textures: &[Vec4], d: Vec3) -> Vec3 {
 /// the uniform point `u` (xyz), and its solid-angle density (w), not yet times the
 /// probability `Frame::env_light` of choosing the environment.
 #[kernel_fn]
-pub fn environment_sample(f: &Frame, textures: &[Vec4], n: Vec3, u: Vec2) -> Vec4 {
-    if f.env_map != 0 {
+pub fn environment_sample(shading: u32, f: &Frame, textures: &[Vec4], n: Vec3, u: Vec2) -> Vec4 {
+    if shading & SHADES_ENV_MAP != 0 && f.env_map != 0 {
         env_map_sample(textures, f.env_map - 1, u)
     } else {
         let wi = crate::sampling::frame(n) * crate::sampling::cosine_hemisphere(u);
@@ -180,10 +182,10 @@ pub fn environment_sample(f: &Frame, textures: &[Vec4], n: Vec3, u: Vec2) -> Vec
 /// towards the environment, the choice of the environment included (0 without one): what
 /// MIS weighs a BSDF-sampled ray that leaves the scene against.
 #[kernel_fn]
-pub fn environment_pdf(f: &Frame, textures: &[Vec4], n: Vec3, d: Vec3) -> f32 {
+pub fn environment_pdf(shading: u32, f: &Frame, textures: &[Vec4], n: Vec3, d: Vec3) -> f32 {
     let mut p = 0.0f32;
     if f.env_light > 0.0 {
-        if f.env_map != 0 {
+        if shading & SHADES_ENV_MAP != 0 && f.env_map != 0 {
             p = env_map_pdf(textures, f.env_map - 1, d);
         } else {
             p = d.dot(n).max(0.0) * core::f32::consts::FRAC_1_PI;

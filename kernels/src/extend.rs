@@ -25,6 +25,7 @@ use crate::scatter::{
     blend_eval, blend_traits, blend_weight, scatter_eval, BLEND_LEVELS, BLEND_NONE,
     BLEND_NOT_PLAIN, BLEND_READS_UV,
 };
+use crate::shading::*;
 use crate::texture::{hit_uv, luminance, texture_at_hit};
 use cohort::prelude::*;
 
@@ -238,9 +239,10 @@ pub fn shading_normal(
 
 /// The radiance emitter material `m` sends from point `h` (barycentric weights of v1 and
 /// v2 in `h.y`, `h.z`) of triangle `original`: its texture's value there (Mitsuba's
-/// textured `radiance`), else `m.emission`.
+/// textured `radiance`), else `m.emission`. `shading`: the scene's set (`crate::shading`).
 #[kernel_fn]
 pub fn emitted(
+    shading: u32,
     m: Material,
     textures: &[Vec4],
     tex_coords: &[Vec4],
@@ -248,7 +250,7 @@ pub fn emitted(
     h: Vec4,
 ) -> Vec3 {
     let mut e = m.emission;
-    if m.emission_texture != 0 {
+    if shading & SHADES_TEXTURES != 0 && m.emission_texture != 0 {
         let uv = hit_uv(tex_coords, original, h);
         e = texture_at_hit(textures, m.emission_texture - 1, uv, original, h);
     }
@@ -267,6 +269,7 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 #[allow(clippy::too_many_arguments)]
 pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     #[builtin(global_index)] gi: u32,
+    #[specialize] shading: u32,
     f: &Frame,
     count: &[u32],
     idrays: &[u32],
@@ -291,6 +294,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     flags: &mut [u32],
     completed: &[AtomicU32],
 ) {
+    // What the scene shades with (`crate::shading`): a test below on a kind or feature
+    // that the scene lacks is false when the kernel is built, and its branch is left out.
+    let has_blend = shading & SHADES_BLEND != 0;
+    let has_mask = shading & SHADES_MASK != 0;
+    let has_perturb = shading & SHADES_PERTURB != 0;
+    let has_textures = shading & SHADES_TEXTURES != 0;
+    let has_delta_lights = shading & SHADES_DELTA_LIGHTS != 0;
     // The group's shared draws come first, in uniform control flow: the patch of
     // coherent sampling and the group's Russian-roulette number. They are keyed by
     // iteration, not by path, so each shard of a render draws them from its own seed.
@@ -381,7 +391,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                 }
                 if !hidden {
-                    l += thr * environment_radiance(f, textures, d) * w;
+                    l += thr * environment_radiance(shading, f, textures, d) * w;
                 }
             } else {
                 let t = tris[tri as usize];
@@ -395,25 +405,27 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // The blend level of the BSDF chosen, and the probability of that choice.
                 let mut picked = 0u32;
                 let mut pick_p = 1.0f32;
-                while level < BLEND_LEVELS && m.blend != 0 {
-                    let weight = blend_weight(textures, tex_coords, m, t, h);
-                    if uniform(key, 10 + level) < weight {
-                        m = materials[(m.blend - 1) as usize];
-                        level += 1;
-                        picked = level;
-                        pick_p *= weight;
-                    } else {
-                        pick_p *= 1.0 - weight;
-                        level = BLEND_LEVELS;
+                if has_blend {
+                    while level < BLEND_LEVELS && m.blend != 0 {
+                        let weight = blend_weight(textures, tex_coords, m, t, h);
+                        if uniform(key, 10 + level) < weight {
+                            m = materials[(m.blend - 1) as usize];
+                            level += 1;
+                            picked = level;
+                            pick_p *= weight;
+                        } else {
+                            pick_p *= 1.0 - weight;
+                            level = BLEND_LEVELS;
+                        }
                     }
                 }
                 // Light samples and MIS densities see the blend's weighted sum
                 // (`crate::scatter`), where its BSDFs share the surface.
                 let mut traits = 0u32;
-                if root.blend != 0 {
+                if has_blend && root.blend != 0 {
                     traits = blend_traits(materials, root);
                 }
-                let plain_blend = root.blend != 0 && traits & BLEND_NOT_PLAIN == 0;
+                let plain_blend = has_blend && root.blend != 0 && traits & BLEND_NOT_PLAIN == 0;
                 let mixture = I::NEE && plain_blend;
                 // A hit on a (numerically) degenerate triangle has no normal: shade it as
                 // facing the ray rather than let a NaN normal into the next ray.
@@ -440,25 +452,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             w = mis_power(b4.w, area_to_solid_angle(t.light_pdf, h.x, ng.dot(d)));
                         }
                     }
-                    l += thr * emitted(m, textures, tex_coords, t.original, h) * w;
+                    l += thr * emitted(shading, m, textures, tex_coords, t.original, h) * w;
                 }
                 let u = Vec2::new(uniform(key, 2), uniform(key, 3));
                 // The material's colour (diffuse, plastic base, conductor reflectance), or its
                 // texture's here.
                 let mut uv = Vec2::ZERO;
-                if m.texture != 0
-                    || (plain_blend && traits & BLEND_READS_UV != 0)
-                    || m.opacity_texture != 0
-                    || m.perturb_texture != 0
-                    || m.flags & READS_UV != 0
-                {
+                let textured = has_textures
+                    && (m.texture != 0
+                        || (plain_blend && traits & BLEND_READS_UV != 0)
+                        || m.opacity_texture != 0
+                        || m.flags & READS_UV != 0);
+                if textured || (has_perturb && m.perturb_texture != 0) {
                     uv = hit_uv(tex_coords, t.original, h);
                 }
                 // Mitsuba `normalmap` / `bumpmap`: the BSDF shades around the perturbed
                 // normal `np`; `base` is the shading normal of the side the map applies on,
                 // against which each direction is weighed (`perturb_weight`). Emission
                 // above stays with the unperturbed surface.
-                let perturbed = m.perturb_texture != 0;
+                let perturbed = has_perturb && m.perturb_texture != 0;
                 let shadowing = m.flags & NO_SHADOWING == 0;
                 let mut base = ns;
                 let mut np = ns;
@@ -472,15 +484,15 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     n = if front { np } else { -np };
                 }
                 let mut albedo = m.color;
-                if m.texture != 0 {
+                if has_textures && m.texture != 0 {
                     albedo = texture_at_hit(textures, m.texture - 1, uv, t.original, h);
                 }
                 // Mitsuba `mask`: the BSDF scatters with probability `opacity`, else the path
                 // passes through (a null interaction: one more vertex, a delta density).
                 let mut opacity = 1.0f32;
-                if m.flags & MASKED != 0 {
+                if has_mask && m.flags & MASKED != 0 {
                     opacity = m.opacity;
-                    if m.opacity_texture != 0 {
+                    if has_textures && m.opacity_texture != 0 {
                         opacity = luminance(texture_at_hit(
                             textures,
                             m.opacity_texture - 1,
@@ -492,16 +504,25 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     opacity = opacity.clamp(0.0, 1.0);
                 }
                 let masked_through = opacity < 1.0 && uniform(key, 9) >= opacity;
-                let diffuse =
-                    m.kind == DIFFUSE && (front || two_sided) && albedo.max_element() > 0.0;
+                let diffuse = shading & SHADES_DIFFUSE != 0
+                    && m.kind == DIFFUSE
+                    && (front || two_sided)
+                    && albedo.max_element() > 0.0;
                 // Conductors are one-sided, as in Mitsuba: the back absorbs.
-                let glossy = m.kind == ROUGH_CONDUCTOR && (front || two_sided);
-                let plastic = m.kind == PLASTIC && (front || two_sided);
-                let rough_plastic = m.kind == ROUGH_PLASTIC && (front || two_sided);
-                let rough_dielectric = m.kind == ROUGH_DIELECTRIC;
+                let glossy = shading & SHADES_ROUGH_CONDUCTOR != 0
+                    && m.kind == ROUGH_CONDUCTOR
+                    && (front || two_sided);
+                let plastic =
+                    shading & SHADES_PLASTIC != 0 && m.kind == PLASTIC && (front || two_sided);
+                let rough_plastic = shading & SHADES_ROUGH_PLASTIC != 0
+                    && m.kind == ROUGH_PLASTIC
+                    && (front || two_sided);
+                let rough_dielectric =
+                    shading & SHADES_ROUGH_DIELECTRIC != 0 && m.kind == ROUGH_DIELECTRIC;
                 // Mitsuba `principled` / `principledthin`: both sides scatter (the back
                 // as Mitsuba's BSDF does there, or as the front under `twosided`).
-                let principled = m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN;
+                let principled = shading & SHADES_PRINCIPLED != 0
+                    && (m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN);
                 // The rough dielectric's index ratio across the interface, far side over near.
                 let eta_rd = if front { m.param } else { 1.0 / m.param };
                 // Light sampling at non-delta vertices, if the depth limit allows one
@@ -534,17 +555,17 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         let mut delta_select = 0.0f32;
                         let mut tmax = 3.0e38f32;
                         if ul < f.env_light {
-                            let s = environment_sample(f, textures, n, up);
+                            let s = environment_sample(shading, f, textures, n, up);
                             wi = s.truncate();
                             light_pdf = f.env_light * s.w;
-                            le = environment_radiance(f, textures, wi);
+                            le = environment_radiance(shading, f, textures, wi);
                         } else {
                             let id = pick_light(
                                 lights,
                                 f.light_count,
                                 (ul - f.env_light) / (1.0 - f.env_light),
                             );
-                            if id & DELTA_LIGHT != 0 {
+                            if has_delta_lights && id & DELTA_LIGHT != 0 {
                                 let k = id & !DELTA_LIGHT;
                                 let dd = delta_light_direction(delta_lights, k, o);
                                 if dd.w > 0.0 {
@@ -566,6 +587,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     if cos_l < 0.0 || lm.flags & TWO_SIDED != 0 {
                                         light_pdf = area_to_solid_angle(lt.light_pdf, dist, cos_l);
                                         le = emitted(
+                                            shading,
                                             lm,
                                             textures,
                                             tex_coords,
@@ -582,12 +604,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             // f·cos and the BSDF-sampling density of `wi`.
                             let e = if mixture {
                                 blend_eval(
-                                    materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
-                                    front, BLEND_NONE,
+                                    shading, materials, textures, tex_coords, root, t, h, uv, d,
+                                    wi, n, ng, front, BLEND_NONE,
                                 )
                             } else {
                                 scatter_eval(
-                                    textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
+                                    shading, textures, tex_coords, m, albedo, t, h, uv, d, wi, n,
+                                    ng, front,
                                 )
                             };
                             let fc = e.truncate();
@@ -656,7 +679,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // group's random patch), so any weights that sum to one stay unbiased.
                     let c = new_d.dot(n).max(0.0);
                     bsdf_pdf = c * core::f32::consts::FRAC_1_PI;
-                    env_pdf = environment_pdf(f, textures, n, new_d);
+                    env_pdf = environment_pdf(shading, f, textures, n, new_d);
                 } else if plastic {
                     // Mitsuba `plastic`: the coating's specular reflection or the base's
                     // diffuse scattering, chosen by their Fresnel-weighted mean albedos.
@@ -676,7 +699,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * base * ((1.0 - f_i) * (1.0 - f_o) / (1.0 - p_spec) * s.w);
                         // As for diffuse bounces: cosine densities whatever S drew.
                         bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
-                        env_pdf = environment_pdf(f, textures, n, new_d);
+                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
                     }
                     alive = true;
                 } else if rough_plastic {
@@ -715,9 +738,12 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * weight;
                         alive = true;
                         bsdf_pdf = e.w;
-                        env_pdf = environment_pdf(f, textures, n, new_d);
+                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
                     }
-                } else if m.kind == CONDUCTOR && (front || two_sided) {
+                } else if shading & SHADES_CONDUCTOR != 0
+                    && m.kind == CONDUCTOR
+                    && (front || two_sided)
+                {
                     let cos_i = -d.dot(n);
                     new_d = d + n * (2.0 * cos_i);
                     thr = thr * albedo * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
@@ -743,7 +769,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         thr = thr * albedo * fresnel * (e.x / e.y);
                         alive = true;
                         bsdf_pdf = e.y;
-                        env_pdf = environment_pdf(f, textures, n, new_d);
+                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
                     }
                 } else if principled {
                     let fr = crate::principled::frame(m, textures, tex_coords, t, ng, n, front);
@@ -763,10 +789,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             }
                             alive = true;
                             bsdf_pdf = e.w;
-                            env_pdf = environment_pdf(f, textures, n, new_d);
+                            env_pdf = environment_pdf(shading, f, textures, n, new_d);
                         }
                     }
-                } else if m.kind == ROUGH_DIELECTRIC {
+                } else if rough_dielectric {
                     // Mitsuba `roughdielectric`: a microfacet normal seen from the ray's side,
                     // then reflection with the Fresnel probability, else refraction. MIS
                     // weighs what it then meets against light sampling at this vertex.
@@ -795,9 +821,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                         alive = true;
                         let e = crate::rough_dielectric::eval(-d, new_d, fr, eta_rd, a, beckmann);
                         bsdf_pdf = e.y;
-                        env_pdf = environment_pdf(f, textures, n, new_d);
+                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
                     }
-                } else if m.kind == DIELECTRIC {
+                } else if shading & SHADES_DIELECTRIC != 0 && m.kind == DIELECTRIC {
                     // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
                     let eta = if front { m.param } else { 1.0 / m.param };
                     let cos_i = -d.dot(n);
@@ -823,8 +849,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // (With or without light sampling: it is the BSDF's weight, not a density.)
                 if plain_blend && alive && delta_p > 0.0 {
                     let rest = blend_eval(
-                        materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
-                        picked,
+                        shading, materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng,
+                        front, picked,
                     );
                     let own = pick_p * delta_p;
                     thr = (thr * own + thr_in * rest.truncate()) / (own + rest.w);
@@ -833,8 +859,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // light sampling by the blend's density (delta directions keep 0).
                 if mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through {
                     bsdf_pdf = blend_eval(
-                        materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng, front,
-                        BLEND_NONE,
+                        shading, materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng,
+                        front, BLEND_NONE,
                     )
                     .w;
                 }

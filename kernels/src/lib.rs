@@ -37,6 +37,7 @@ pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod sampling;
 pub mod scatter;
+pub mod shading;
 pub mod shadow;
 pub mod texture;
 pub mod traverse;

@@ -21,6 +21,7 @@ use crate::layout::*;
 use crate::sampling::{
     fresnel_conductor, fresnel_dielectric, plastic_base, plastic_specular_probability,
 };
+use crate::shading::*;
 use crate::texture::{hit_uv, luminance, texture_at_hit};
 use cohort::prelude::*;
 
@@ -90,8 +91,10 @@ pub fn blend_traits(materials: &[Material], root: Material) -> u32 {
 /// `d` at a hit with shading normal `n` (on the side the ray arrives from; `front`: the
 /// surface's front side) and geometric normal `ng`. Zero for BSDFs without a non-delta
 /// lobe (smooth conductors and dielectrics) and for one-sided BSDFs seen from the back.
+/// Only the kinds in `shading` (the scene's set, `crate::shading`) are built.
 #[kernel_fn]
 pub fn scatter_eval(
+    shading: u32,
     textures: &[Vec4],
     tex_coords: &[Vec4],
     m: Material,
@@ -108,11 +111,11 @@ pub fn scatter_eval(
     let two_sided = m.flags & TWO_SIDED != 0;
     let faces = front || two_sided;
     let mut out = Vec4::ZERO;
-    if m.kind == DIFFUSE && faces && albedo.max_element() > 0.0 {
+    if shading & SHADES_DIFFUSE != 0 && m.kind == DIFFUSE && faces && albedo.max_element() > 0.0 {
         let c = wi.dot(n).max(0.0);
         let fc = albedo * (c * core::f32::consts::FRAC_1_PI);
         out = fc.extend(c * core::f32::consts::FRAC_1_PI);
-    } else if m.kind == PLASTIC && faces {
+    } else if shading & SHADES_PLASTIC != 0 && m.kind == PLASTIC && faces {
         // The coating's delta reflection cannot meet a light sample: only the base
         // scatters towards it.
         let c = wi.dot(n).max(0.0);
@@ -122,7 +125,7 @@ pub fn scatter_eval(
         let base = plastic_base(albedo, m.param, m.flags & NONLINEAR != 0);
         let fc = base * ((1.0 - f_i) * (1.0 - f_o) * c * core::f32::consts::FRAC_1_PI);
         out = fc.extend((1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI);
-    } else if m.kind == ROUGH_DIELECTRIC {
+    } else if shading & SHADES_ROUGH_DIELECTRIC != 0 && m.kind == ROUGH_DIELECTRIC {
         // The index ratio across the interface, far side over near.
         let eta_rd = if front { m.param } else { 1.0 / m.param };
         let a = crate::rough_dielectric::alpha(textures, m, uv, t.original, h);
@@ -130,20 +133,22 @@ pub fn scatter_eval(
         let e = crate::rough_dielectric::eval(-d, wi, fr, eta_rd, a, m.flags & BECKMANN != 0);
         let tint = if e.z > 0.0 { m.color } else { m.transmittance };
         out = (tint * e.x).extend(e.y);
-    } else if m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN {
+    } else if shading & SHADES_PRINCIPLED != 0
+        && (m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN)
+    {
         // Both sides scatter (the back as Mitsuba's BSDF does there, or as the front under
         // `twosided`).
         let fr = crate::principled::frame(m, textures, tex_coords, t, ng, n, front);
         let pp = crate::principled::params(textures, m, albedo, uv, t.original, h);
         out = crate::principled::eval_kind(pp, m.kind, fr.transpose() * -d, fr.transpose() * wi);
-    } else if m.kind == ROUGH_PLASTIC && faces {
+    } else if shading & SHADES_ROUGH_PLASTIC != 0 && m.kind == ROUGH_PLASTIC && faces {
         let fr = crate::sampling::frame(n);
         let wo = fr.transpose() * -d;
         let wl = fr.transpose() * wi;
         let t_i = crate::rough_plastic::transmittance(textures, m, wo.z);
         let t_o = crate::rough_plastic::transmittance(textures, m, wl.z);
         out = crate::rough_plastic::eval(wo, wl, m, albedo, t_i, t_o);
-    } else if m.kind == ROUGH_CONDUCTOR && faces {
+    } else if shading & SHADES_ROUGH_CONDUCTOR != 0 && m.kind == ROUGH_CONDUCTOR && faces {
         // Conductors are one-sided, as in Mitsuba: the back absorbs.
         let fr = crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
         let a = crate::rough_conductor::alpha(textures, m, uv, t.original, h);
@@ -165,6 +170,7 @@ pub fn scatter_eval(
 /// ([`BLEND_NONE`]: none).
 #[kernel_fn]
 pub fn blend_eval(
+    shading: u32,
     materials: &[Material],
     textures: &[Vec4],
     tex_coords: &[Vec4],
@@ -192,11 +198,11 @@ pub fn blend_eval(
         let p = reach * (1.0 - w);
         if p > 0.0 && level != skip {
             let mut albedo = m.color;
-            if m.texture != 0 {
+            if shading & SHADES_TEXTURES != 0 && m.texture != 0 {
                 albedo = texture_at_hit(textures, m.texture - 1, uv, t.original, h);
             }
             sum += scatter_eval(
-                textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
+                shading, textures, tex_coords, m, albedo, t, h, uv, d, wi, n, ng, front,
             ) * p;
         }
         if nested {

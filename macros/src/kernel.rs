@@ -93,9 +93,14 @@ impl Parse for KernelAttr {
 
 enum ParamKind {
     Builtin(syn::Ident),
-    Storage { elem: Type, writable: bool },
+    Storage {
+        elem: Type,
+        writable: bool,
+    },
     Uniform(Type),
     Workgroup(Type),
+    /// `#[specialize]`: a value fixed when the kernel is built (its `k`-th constant).
+    Constant(Type, usize),
 }
 
 struct Param {
@@ -170,7 +175,7 @@ fn is_atomic(t: &Type) -> bool {
     false
 }
 
-fn classify(arg: &mut FnArg) -> syn::Result<Param> {
+fn classify(arg: &mut FnArg, constants: &mut usize) -> syn::Result<Param> {
     let FnArg::Typed(pt) = arg else {
         return err_at(arg, "kernels take no `self`");
     };
@@ -180,6 +185,7 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
     };
     let mut builtin = None;
     let mut workgroup = false;
+    let mut specialize = false;
     let mut kept = Vec::new();
     for a in pt.attrs.drain(..) {
         if a.path().is_ident("builtin") {
@@ -202,6 +208,11 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
             });
         } else if a.path().is_ident("workgroup") {
             workgroup = true;
+        } else if a.path().is_ident("specialize") {
+            if let syn::Meta::List(l) = &a.meta {
+                return err_at(l, "`#[specialize]` takes no arguments");
+            }
+            specialize = true;
         } else {
             kept.push(a);
         }
@@ -209,6 +220,15 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
     pt.attrs = kept;
     let kind = if let Some(b) = builtin {
         ParamKind::Builtin(b)
+    } else if specialize {
+        let ok = matches!(&*pt.ty, Type::Path(p) if p.qself.is_none() && (p.path.is_ident("u32") || p.path.is_ident("bool")));
+        if !ok {
+            return err_at(
+                &pt.ty,
+                "a `#[specialize]` parameter is a `u32` or a `bool` (a value fixed when the kernel is built)",
+            );
+        }
+        ParamKind::Constant((*pt.ty).clone(), *constants)
     } else {
         match &*pt.ty {
             Type::Reference(r) => {
@@ -235,8 +255,20 @@ fn classify(arg: &mut FnArg) -> syn::Result<Param> {
             }
         }
     };
+    if let ParamKind::Constant(..) = kind {
+        *constants += 1;
+        if *constants > MAX_CONSTANTS {
+            return err_at(
+                &pt.pat,
+                format!("a kernel has at most {MAX_CONSTANTS} `#[specialize]` parameters; pack flags into one `u32`"),
+            );
+        }
+    }
     Ok(Param { name, kind })
 }
+
+/// `cohort_compiler::spec::MAX_CONSTANTS` (the macro crate cannot depend on the compiler).
+const MAX_CONSTANTS: usize = 4;
 
 pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     crate::types_check::check(&f)?;
@@ -254,8 +286,9 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
         return err_at(u, "kernels are plain `fn`s (not async or unsafe)");
     }
     let mut params = Vec::new();
+    let mut constants = 0usize;
     for arg in f.sig.inputs.iter_mut() {
-        params.push(classify(arg)?);
+        params.push(classify(arg, &mut constants)?);
     }
 
     // Front-end checks: uniformity, and what host-run group closures may read.
@@ -272,6 +305,11 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 up.nonuniform.insert(n);
             }
             ParamKind::Uniform(_) => {
+                up.uniform_buffers.insert(n);
+            }
+            // The same value for every invocation, and a host value the launch has.
+            ParamKind::Constant(..) => {
+                up.uniform.insert(n.clone());
                 up.uniform_buffers.insert(n);
             }
             ParamKind::Storage { .. } | ParamKind::Workgroup(_) => {
@@ -301,6 +339,8 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     let mut uniform_uploads = Vec::new();
     let mut layout_checks = Vec::new();
     let mut storage_names = Vec::new();
+    let mut constant_names = Vec::new();
+    let mut constant_params = Vec::new();
     for (i, p) in params.iter().enumerate() {
         let name = &p.name;
         let lit = name.to_string();
@@ -351,8 +391,20 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 decls.push(quote_spanned! {pspan=> let #name = ::cohort::ir::Workgroup::<#t>::declare(#lit); });
                 rw.bind(&lit, Bind::Root);
             }
+            ParamKind::Constant(t, k) => {
+                decls.push(quote_spanned! {pspan=> let #name: ::cohort::ir::Val<#t> = ::cohort::ir::spec_constant::<#t>(__cohort_constants[#k]); });
+                rw.bind(&lit, Bind::Val);
+                launch_names.push(name.clone());
+                launch_params.push(quote_spanned! {pspan=> #name: #t });
+                constant_names.push(name.clone());
+                constant_params.push(quote_spanned! {pspan=> #name: #t });
+            }
         }
     }
+    // The launch functions build the specialisation of their constants' values.
+    let specialize_spec = quote! {
+        let __cohort_spec = &self::specialized(__cohort_spec #(, #constant_names)*);
+    };
     let body = rw.block(&f.block)?;
     crate::host::host_block(&mut f.block);
     let (cpu_copy, cpu_invoke, cpu_workgroup_vars) = cpu_form(&f, &params);
@@ -456,6 +508,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
 
             /// Builds the kernel's naga module for one specialisation.
             pub fn build #generics (spec: &::cohort::Spec) -> ::cohort::ir::BuiltKernel #where_static {
+                let __cohort_constants = spec.constants;
                 ::cohort::ir::build_kernel(&INFO, *spec, || {
                     #(#decls)*
                     ::cohort::ir::discard(#body);
@@ -495,6 +548,12 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 ::cohort::Spec::for_device(&INFO, &device.info().target(), group.unwrap_or(INFO.group))
             }
 
+            /// `spec` with the kernel's `#[specialize]` parameters set to these values
+            /// (the specialisation `artifact` builds; the launch functions make it).
+            pub fn specialized(spec: &::cohort::Spec #(, #constant_params)*) -> ::cohort::Spec {
+                spec.with_constants(&[#(::cohort::ir::SpecConstant::raw(#constant_names)),*])
+            }
+
             /// Runs the kernel with the attribute's group level.
             // The launch functions' own parameters and locals are `__cohort_*`, and they
             // call this module's functions through `self::`, so that a kernel parameter
@@ -516,6 +575,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 __cohort_grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
                 #(#launch_params),*
             ) -> ::cohort::Result<()> #where_static {
+                #specialize_spec
                 let __cohort_device = __cohort_batch.device();
                 let __cohort_art = self::artifact #turbofish (__cohort_spec)?;
                 #(#uniform_uploads)*
@@ -534,6 +594,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 __cohort_grid: impl ::core::convert::Into<::cohort::Grid<'__grid>>,
                 #(#launch_params),*
             ) -> ::cohort::Result<::cohort::runtime::DispatchStats> #where_static {
+                #specialize_spec
                 let __cohort_art = self::artifact #turbofish (__cohort_spec)?;
                 #(#uniform_uploads)*
                 #lengths_upload
@@ -600,6 +661,12 @@ fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStr
             ParamKind::Uniform(t) => {
                 call_args.push(bind(&mut binds, quote!(a.uniform::<#t>(#buffer))));
                 buffer += 1;
+            }
+            ParamKind::Constant(t, k) => {
+                call_args.push(bind(
+                    &mut binds,
+                    quote!(<#t as ::cohort::ir::SpecConstant>::from_raw(a.constant(#k))),
+                ));
             }
             ParamKind::Workgroup(t) => {
                 call_args.push(bind(&mut binds, quote!(a.workgroup::<#t>(#workgroup))));

@@ -40,6 +40,9 @@ pub struct GpuScene {
     pub nodes8: Option<GpuBuffer<WideNode>>,
     /// The scene's bounding box (the BVH root's), for ray reordering's grid of origin cells.
     pub bounds: [glam::Vec3; 2],
+    /// The BSDF kinds and shading features the scene uses (`cohort_kernels::shading`):
+    /// `extend` is built with these alone.
+    pub shading: u32,
 }
 
 impl GpuScene {
@@ -124,10 +127,18 @@ impl GpuScene {
             .into_iter()
             .map(glam::Vec4::from_array)
             .collect();
+        let env_map = scene.gpu_environment_map();
+        // The kernels reach a delta light only through an alias-table entry naming it
+        // (`lights.delta` is never empty: it holds a stand-in where there is none).
+        let delta = cohort_kernels::layout::DELTA_LIGHT;
+        let has_delta = (lights.entries.iter().take(lights.count as usize))
+            .any(|e| e.tri & delta != 0 || e.alias_tri & delta != 0);
+        let shading = cohort_kernels::shading::shading_set(mats, has_delta, env_map != 0);
         Ok(GpuScene {
+            shading,
             tex_coords: upload(device, &tex_coords)?,
             textures: upload(device, &textures)?,
-            env_map: scene.gpu_environment_map(),
+            env_map,
             nodes: upload(device, nodes)?,
             triangles: upload(device, &tris)?,
             materials: upload(device, mats)?,

@@ -17,6 +17,7 @@ pub mod renderer;
 pub mod roulette;
 pub mod shard;
 
+pub use cohort_kernels::shading;
 pub use gpu_scene::GpuScene;
 pub use image::Image;
 pub use renderer::{

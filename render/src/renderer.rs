@@ -8,10 +8,11 @@
 //! several renderers can take turns on the GPU (`cohort figures` does, so that each sees
 //! the same clock changes). [`Renderer::render`] is one start and one advance.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use cohort::runtime::{
-    Batch, Device, DispatchStats, GpuBuffer, ReadBack, RuntimeError, Submission,
+    Batch, Device, DispatchStats, GpuBuffer, KernelArtifact, ReadBack, RuntimeError, Submission,
 };
 use cohort::Group;
 use cohort_kernels::compact;
@@ -372,6 +373,9 @@ pub struct Startup {
     pub upload: Duration,
     /// Pipeline creation of the kernels the options use (prepared before any render).
     pub pipelines: Duration,
+    /// What `extend` was built for: the scene's BSDF kinds and shading features
+    /// (`cohort_kernels::shading`, whose `label` names them).
+    pub shading: u32,
 }
 
 /// What a run carries from one `advance` to the next.
@@ -489,6 +493,7 @@ impl<'d> Renderer<'d> {
             bvh_build: gpu.bvh_build,
             upload: gpu.upload + allocated.elapsed(),
             pipelines: Duration::ZERO,
+            shading: gpu.shading,
         };
         let mut r = Renderer {
             device,
@@ -757,34 +762,65 @@ impl<'d> Renderer<'d> {
         let started = Instant::now();
         let d = self.device;
         let specs = self.specs();
-        let mut arts = vec![
-            init_paths::artifact(&init_paths::spec(d, None))?,
-            extend::artifact::<S, E, I>(&specs.extend)?,
-        ];
+        let shading = self.scene.shading;
+        self.startup.shading = shading;
         let wide = self.scene.nodes8.is_some();
-        arts.push(if wide {
-            traverse8::artifact(&specs.traverse8)?
-        } else {
-            traverse::artifact(&specs.traverse)?
-        });
+        let compact = self.opts.compact;
+        let reorder = self.opts.reorder > 0;
+        // Every stage this render uses, built (IR, WGSL or SPIR-V) and compiled by the
+        // driver on a thread of its own: `extend` takes the longest, and the others
+        // finish beside it.
+        type Build<'s> =
+            Box<dyn FnOnce() -> Result<Vec<Arc<KernelArtifact>>, RenderError> + Send + 's>;
+        let mut builds: Vec<Build<'_>> = vec![
+            Box::new(|| Ok(vec![init_paths::artifact(&init_paths::spec(d, None))?])),
+            Box::new(|| {
+                Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
+                    &specs.extend,
+                    shading,
+                ))?])
+            }),
+            Box::new(|| {
+                Ok(vec![if wide {
+                    traverse8::artifact(&specs.traverse8)?
+                } else {
+                    traverse::artifact(&specs.traverse)?
+                }])
+            }),
+        ];
         if I::NEE {
-            arts.push(if wide {
-                trace_shadow8::artifact(&specs.shadow8)?
-            } else {
-                trace_shadow::artifact(&specs.shadow)?
-            });
+            builds.push(Box::new(|| {
+                Ok(vec![if wide {
+                    trace_shadow8::artifact(&specs.shadow8)?
+                } else {
+                    trace_shadow::artifact(&specs.shadow)?
+                }])
+            }));
         }
-        if self.opts.compact {
-            arts.extend(compact::artifacts(&specs.compact)?);
+        if compact {
+            builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
         }
-        if self.opts.reorder > 0 {
-            arts.extend(reorder::artifacts(&specs.reorder)?);
-            if self.paths.sort.is_none() {
-                self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
-            }
+        if reorder {
+            builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));
         }
-        for a in &arts {
-            d.prepare(a)?;
+        std::thread::scope(|scope| {
+            let threads: Vec<_> = builds
+                .into_iter()
+                .map(|build| {
+                    scope.spawn(move || -> Result<(), RenderError> {
+                        for a in build()? {
+                            d.prepare(&a)?;
+                        }
+                        Ok(())
+                    })
+                })
+                .collect();
+            threads
+                .into_iter()
+                .try_for_each(|t| t.join().expect("a pipeline thread panicked"))
+        })?;
+        if reorder && self.paths.sort.is_none() {
+            self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
         }
         self.startup.pipelines += started.elapsed();
         Ok(())
@@ -1073,6 +1109,7 @@ fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         b,
         &specs.extend,
         n,
+        scene.shading,
         frame,
         &p.count,
         &p.idrays[cur],

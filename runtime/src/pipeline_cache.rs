@@ -58,9 +58,12 @@ fn code_hash(kernel: &KernelArtifact, code: Code) -> u64 {
     rest.finish()
 }
 
+/// One key's pipeline, filled by the first thread that asks for it.
+type Slot<P> = Arc<Mutex<Option<Arc<P>>>>;
+
 pub(crate) struct PipelineCache<P> {
     code: Code,
-    map: Mutex<HashMap<(String, u64), Arc<P>>>,
+    map: Mutex<HashMap<(String, u64), Slot<P>>>,
 }
 
 impl<P> PipelineCache<P> {
@@ -71,25 +74,37 @@ impl<P> PipelineCache<P> {
         }
     }
 
-    /// Returns the cached pipeline or builds it with `create`. The lock is held while
-    /// compiling so that two threads dispatching the same new kernel compile it once.
+    /// Returns the cached pipeline or builds it with `create`. Only this key's slot is
+    /// locked while compiling: two threads asking for the same new kernel compile it once,
+    /// and different kernels compile at the same time (a renderer prepares its kernels on
+    /// one thread each, and drivers compile pipelines in parallel).
     pub(crate) fn get_or_create(
         &self,
         kernel: &KernelArtifact,
         create: impl FnOnce() -> Result<P>,
     ) -> Result<Arc<P>> {
         let key = (kernel.name.clone(), code_hash(kernel, self.code));
-        let mut map = self.map.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = map.get(&key) {
+        let slot = self
+            .map
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .entry(key)
+            .or_default()
+            .clone();
+        let mut slot = slot.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = &*slot {
             return Ok(p.clone());
         }
         let p = Arc::new(create()?);
-        map.insert(key, p.clone());
+        *slot = Some(p.clone());
         Ok(p)
     }
 
     pub(crate) fn len(&self) -> usize {
-        self.map.lock().unwrap_or_else(|e| e.into_inner()).len()
+        let map = self.map.lock().unwrap_or_else(|e| e.into_inner());
+        map.values()
+            .filter(|s| s.lock().unwrap_or_else(|e| e.into_inner()).is_some())
+            .count()
     }
 
     /// Empties the cache so the owner can destroy the pipelines before its device.
@@ -98,7 +113,7 @@ impl<P> PipelineCache<P> {
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .drain()
-            .map(|(_, p)| p)
+            .filter_map(|(_, s)| s.lock().unwrap_or_else(|e| e.into_inner()).take())
             .collect()
     }
 }

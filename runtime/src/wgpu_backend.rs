@@ -56,6 +56,10 @@ pub(crate) struct WgpuDevice {
     max_buffer_size: u64,
     timestamp_period_ns: f64,
     messages: Arc<Mutex<Vec<String>>>,
+    /// Held while a pipeline is created: wgpu's error scopes (which catch its validation
+    /// errors) are one stack per device in this build (its `std` feature, which makes them
+    /// per thread, is off), so pipelines of one device are created one at a time here.
+    creating: Mutex<()>,
 }
 
 const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
@@ -205,6 +209,7 @@ impl WgpuDevice {
             device,
             queue,
             messages,
+            creating: Mutex::new(()),
         })
     }
 
@@ -215,6 +220,7 @@ impl WgpuDevice {
     }
 
     fn create_pipeline(&self, kernel: &KernelArtifact) -> Result<Pipeline> {
+        let _one_at_a_time = self.creating.lock().unwrap_or_else(|e| e.into_inner());
         let fail = |detail: String| RuntimeError::ShaderCompilation {
             kernel: kernel.name.clone(),
             backend: BACKEND,

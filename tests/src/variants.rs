@@ -27,6 +27,20 @@ fn thread(info: &KernelInfo) -> Spec {
 
 pub fn all() -> Vec<Variant> {
     let mut out = vec![
+        // `#[specialize]`: two values of the constants, each a shader with only its steps.
+        v(
+            &specialize::specialized_steps::INFO,
+            "specialized_steps",
+            thread(&specialize::specialized_steps::INFO).with_constants(&[specialize::DOUBLE, 0]),
+            specialize::specialized_steps::build,
+        ),
+        v(
+            &specialize::specialized_steps::INFO,
+            "specialized_steps",
+            thread(&specialize::specialized_steps::INFO)
+                .with_constants(&[specialize::ROOT | specialize::NEGATE, 1]),
+            specialize::specialized_steps::build,
+        ),
         v(
             &saxpy::saxpy::INFO,
             "saxpy",

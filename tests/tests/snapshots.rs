@@ -87,6 +87,7 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::path_end::{EachPath, WholeGroup};
     use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
+    use cohort_kernels::shading::{SHADES_ALL, SHADES_DIFFUSE};
     use cohort_kernels::traverse::{trace_shadow, traverse};
     use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
     fn variant(
@@ -95,7 +96,17 @@ fn renderer_variants() -> Vec<variants::Variant> {
         group: Group,
         build: fn(&Spec) -> cohort::ir::BuiltKernel,
     ) -> variants::Variant {
-        let spec = Spec::portable(info, group);
+        specialized(label, info, group, &[], build)
+    }
+    // A kernel with `#[specialize]` parameters, at the values in `constants`.
+    fn specialized(
+        label: &str,
+        info: &KernelInfo,
+        group: Group,
+        constants: &[u32],
+        build: fn(&Spec) -> cohort::ir::BuiltKernel,
+    ) -> variants::Variant {
+        let spec = Spec::portable(info, group).with_constants(constants);
         variants::Variant {
             name: format!("renderer_{label}__{}", spec.suffix()),
             spec,
@@ -174,17 +185,28 @@ fn renderer_variants() -> Vec<variants::Variant> {
         // The viewer's tone mapping (`cohort view`).
         variant("display", &display::INFO, Group::Thread, display::build),
         // The default render (independent cosine sampling, light sampling) and the paper's
-        // coherent sampling with a whole-warp end, implicit paths.
-        variant(
+        // coherent sampling with a whole-warp end, implicit paths: for a scene of every
+        // BSDF kind and shading feature, and for the Cornell box (diffuse only), whose
+        // kernel has no other BSDF.
+        specialized(
             "extend_cosine_nee",
             &extend::INFO,
             Group::Thread,
+            &[SHADES_ALL],
             extend::build::<Cosine, EachPath, NextEvent>,
         ),
-        variant(
+        specialized(
+            "extend_cosine_nee_diffuse",
+            &extend::INFO,
+            Group::Thread,
+            &[SHADES_DIFFUSE],
+            extend::build::<Cosine, EachPath, NextEvent>,
+        ),
+        specialized(
             "extend_coherent_wholegroup_path",
             &extend::INFO,
             Group::Warp,
+            &[SHADES_ALL],
             extend::build::<CoherentCosine, WholeGroup, Implicit>,
         ),
     ]

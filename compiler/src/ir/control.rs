@@ -12,6 +12,15 @@ use super::ops::{le, lt};
 use super::types::GpuType;
 use super::val::{lit, Val, Var};
 
+/// The value of `cond` when the kernel is built: a literal (a constant, a specialisation
+/// constant, or an operation on them that the builder folded).
+fn known(cond: Val<bool>) -> Option<bool> {
+    with(|c| match c.f().func.expressions[cond.h] {
+        naga::Expression::Literal(naga::Literal::Bool(b)) => Some(b),
+        _ => None,
+    })
+}
+
 fn block(body: impl FnOnce()) -> Block {
     with(|c| c.push_block());
     body();
@@ -23,11 +32,7 @@ fn block(body: impl FnOnce()) -> Block {
 /// build time and the other branch is not built at all: it may use what this
 /// specialisation cannot lower (e.g. `group_any` in a grid-level kernel).
 pub fn if_(cond: Val<bool>, then: impl FnOnce(), otherwise: impl FnOnce()) {
-    let known = with(|c| match c.f().func.expressions[cond.h] {
-        naga::Expression::Literal(naga::Literal::Bool(b)) => Some(b),
-        _ => None,
-    });
-    match known {
+    match known(cond) {
         Some(true) => return then(),
         Some(false) => return otherwise(),
         None => {}
@@ -49,6 +54,11 @@ pub fn if_value<T: GpuType>(
     then: impl FnOnce() -> Val<T>,
     otherwise: impl FnOnce() -> Val<T>,
 ) -> Val<T> {
+    match known(cond) {
+        Some(true) => return then(),
+        Some(false) => return otherwise(),
+        None => {}
+    }
     let tmp = Var::<T>::uninit("branch_value");
     if_(cond, || tmp.set(then()), || tmp.set(otherwise()));
     tmp.get()
@@ -173,14 +183,26 @@ fn check_not_inlined(depth: u32) {
 }
 
 /// `a && b`, evaluating `b` only when `a` holds (it may index out of bounds otherwise).
+/// Known operands fold: `false && b` is `false` with `b` never built, `true && b` is `b`.
 pub fn and(a: Val<bool>, b: impl FnOnce() -> Val<bool>) -> Val<bool> {
+    match known(a) {
+        Some(true) => return b(),
+        Some(false) => return a,
+        None => {}
+    }
     let r = Var::new("and", a);
     if_(a, || r.set(b()), || {});
     r.get()
 }
 
 /// `a || b`, evaluating `b` only when `a` does not hold.
+/// Known operands fold: `true || b` is `true` with `b` never built, `false || b` is `b`.
 pub fn or(a: Val<bool>, b: impl FnOnce() -> Val<bool>) -> Val<bool> {
+    match known(a) {
+        Some(true) => return a,
+        Some(false) => return b(),
+        None => {}
+    }
     let r = Var::new("or", a);
     if_(a, || {}, || r.set(b()));
     r.get()

@@ -30,6 +30,6 @@ pub use types::{
 };
 pub use val::{
     array, array_repeat, compose, field, field_init, index, konst, lit, name, place_field,
-    place_index, zero, AsPlace, AutoDeref, FieldInit, MethodNeedsKernelFn, Place, RtArray, ToVal,
-    Val, Var,
+    place_index, spec_constant, zero, AsPlace, AutoDeref, FieldInit, MethodNeedsKernelFn, Place,
+    RtArray, SpecConstant, ToVal, Val, Var,
 };

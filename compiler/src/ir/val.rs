@@ -330,3 +330,33 @@ impl<T: GpuType> AutoDeref for Place<T> {
     note = "write the method as a #[kernel_fn] helper that takes the value as a parameter (e.g. `#[kernel_fn] fn area(s: Sphere) -> f32`) and call it as a function (`area(s)`)"
 )]
 pub trait MethodNeedsKernelFn {}
+
+/// The types a `#[specialize]` kernel parameter may have, and how each is kept in
+/// [`Spec::constants`](crate::spec::Spec::constants).
+pub trait SpecConstant: ScalarType + Copy {
+    fn raw(self) -> u32;
+    fn from_raw(raw: u32) -> Self;
+}
+impl SpecConstant for u32 {
+    fn raw(self) -> u32 {
+        self
+    }
+    fn from_raw(raw: u32) -> Self {
+        raw
+    }
+}
+impl SpecConstant for bool {
+    fn raw(self) -> u32 {
+        self as u32
+    }
+    fn from_raw(raw: u32) -> Self {
+        raw != 0
+    }
+}
+
+/// A `#[specialize]` parameter in the kernel being built: a literal, so that the branches
+/// it decides (and `&&`, `||` and operations on it) fold when the kernel is built.
+#[doc(hidden)]
+pub fn spec_constant<T: SpecConstant>(raw: u32) -> Val<T> {
+    lit(T::from_raw(raw))
+}

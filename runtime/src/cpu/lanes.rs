@@ -400,6 +400,7 @@ pub(crate) fn run_workgroup(launch: &Launch<'_>, linear: u32, scratch: &mut Scra
     let args = LaneArgs {
         bufs: launch.bufs,
         workgroup: &workgroup,
+        constants: &launch.kernel.constants,
     };
     if !launch.kernel.synchronises {
         // One call for the whole workgroup, the lanes one after another: the buffers are

@@ -46,6 +46,8 @@ pub struct HostKernel {
     /// Whether invocations wait for each other (barriers, subgroup or group operations):
     /// if not, the backend runs them one after another without coroutines.
     pub synchronises: bool,
+    /// The values of the kernel's `#[specialize]` parameters (`Spec::constants`).
+    pub constants: [u32; cohort_compiler::spec::MAX_CONSTANTS],
 }
 
 /// The builtin values of one invocation (docs/LANGUAGE.md, section 9).
@@ -89,9 +91,15 @@ pub type Invoke = fn(&LaneArgs<'_>, &Lanes<'_>);
 pub struct LaneArgs<'a> {
     pub(crate) bufs: &'a [HostBuf],
     pub(crate) workgroup: &'a [*mut u8],
+    pub(crate) constants: &'a [u32],
 }
 
 impl<'a> LaneArgs<'a> {
+    /// The raw value of the kernel's `k`-th `#[specialize]` parameter.
+    pub fn constant(&self, k: usize) -> u32 {
+        self.constants[k]
+    }
+
     fn buf<T>(&self, i: usize) -> HostBuf {
         let b = self.bufs[i];
         assert!(

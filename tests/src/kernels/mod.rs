@@ -17,6 +17,7 @@ pub mod rays;
 pub mod reduce;
 pub mod saxpy;
 pub mod sort4;
+pub mod specialize;
 pub mod stack_walk;
 pub mod subgroup_scan;
 pub mod vectors;

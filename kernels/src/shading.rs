@@ -1,0 +1,128 @@
+//! What a scene shades with: the set of BSDF kinds and shading features its materials and
+//! lights use, one bit each. `extend` takes the set as a `#[specialize]` parameter, so that
+//! each branch for a kind or feature the scene lacks is left out of the kernel when it is
+//! built: a Cornell box compiles a diffuse shader, not every BSDF the renderer knows
+//! (pipeline creation and the software driver's per-dispatch cost grow with the code).
+//!
+//! The host computes the set from the scene's GPU materials ([`shading_set`]); a material
+//! whose kind is not in its kernel's set would shade as black, so the set is always
+//! computed from the materials the kernel reads, never written by hand.
+
+use crate::layout::*;
+
+/// The material kinds, in `Material::kind` order, and their names in labels and
+/// `--stats` (Mitsuba's plugin names).
+pub const KINDS: [(u32, &str); 9] = [
+    (DIFFUSE, "diffuse"),
+    (CONDUCTOR, "conductor"),
+    (ROUGH_CONDUCTOR, "roughconductor"),
+    (DIELECTRIC, "dielectric"),
+    (PLASTIC, "plastic"),
+    (ROUGH_PLASTIC, "roughplastic"),
+    (ROUGH_DIELECTRIC, "roughdielectric"),
+    (PRINCIPLED, "principled"),
+    (PRINCIPLED_THIN, "principledthin"),
+];
+
+/// The bit of material kind `kind` (one of [`KINDS`]).
+pub const fn kind_bit(kind: u32) -> u32 {
+    1 << kind
+}
+
+pub const SHADES_DIFFUSE: u32 = kind_bit(DIFFUSE);
+pub const SHADES_CONDUCTOR: u32 = kind_bit(CONDUCTOR);
+pub const SHADES_ROUGH_CONDUCTOR: u32 = kind_bit(ROUGH_CONDUCTOR);
+pub const SHADES_DIELECTRIC: u32 = kind_bit(DIELECTRIC);
+pub const SHADES_PLASTIC: u32 = kind_bit(PLASTIC);
+pub const SHADES_ROUGH_PLASTIC: u32 = kind_bit(ROUGH_PLASTIC);
+pub const SHADES_ROUGH_DIELECTRIC: u32 = kind_bit(ROUGH_DIELECTRIC);
+pub const SHADES_PRINCIPLED: u32 = kind_bit(PRINCIPLED) | kind_bit(PRINCIPLED_THIN);
+
+/// Some material is a `blendbsdf` (`Material::blend`).
+pub const SHADES_BLEND: u32 = 1 << 16;
+/// Some material has a `mask` (`MASKED`).
+pub const SHADES_MASK: u32 = 1 << 17;
+/// Some material has a normal or bump map (`Material::perturb_texture`).
+pub const SHADES_PERTURB: u32 = 1 << 18;
+/// Some material reads a texture or the hit's (u, v): a textured colour, opacity, blend
+/// weight or radiance, or a parameter looked up at (u, v) (`READS_UV`).
+pub const SHADES_TEXTURES: u32 = 1 << 19;
+/// The scene has point, spot, directional or projector lights (`DeltaLight`).
+pub const SHADES_DELTA_LIGHTS: u32 = 1 << 20;
+/// The environment is a map (`Frame::env_map`), not a constant.
+pub const SHADES_ENV_MAP: u32 = 1 << 21;
+
+/// The features of [`SHADES_BLEND`] and after, with their names in labels.
+pub const FEATURES: [(u32, &str); 6] = [
+    (SHADES_BLEND, "blend"),
+    (SHADES_MASK, "mask"),
+    (SHADES_PERTURB, "normal/bump map"),
+    (SHADES_TEXTURES, "textures"),
+    (SHADES_DELTA_LIGHTS, "delta lights"),
+    (SHADES_ENV_MAP, "environment map"),
+];
+
+/// Every kind and feature: the kernel that shades any scene.
+pub const SHADES_ALL: u32 = {
+    let mut all = 0u32;
+    let mut i = 0;
+    while i < KINDS.len() {
+        all |= kind_bit(KINDS[i].0);
+        i += 1;
+    }
+    let mut i = 0;
+    while i < FEATURES.len() {
+        all |= FEATURES[i].0;
+        i += 1;
+    }
+    all
+};
+
+/// The set of kinds and features that `materials` (every material the kernel can reach,
+/// a blend's nested ones included), `delta_lights` and an environment map use.
+pub fn shading_set(materials: &[Material], delta_lights: bool, env_map: bool) -> u32 {
+    let mut set = 0u32;
+    for m in materials {
+        set |= kind_bit(m.kind);
+        if m.blend != 0 {
+            set |= SHADES_BLEND;
+        }
+        if m.flags & MASKED != 0 {
+            set |= SHADES_MASK;
+        }
+        if m.perturb_texture != 0 {
+            set |= SHADES_PERTURB;
+        }
+        if m.texture != 0
+            || m.opacity_texture != 0
+            || m.blend_texture != 0
+            || m.emission_texture != 0
+            || m.flags & READS_UV != 0
+        {
+            set |= SHADES_TEXTURES;
+        }
+    }
+    if delta_lights {
+        set |= SHADES_DELTA_LIGHTS;
+    }
+    if env_map {
+        set |= SHADES_ENV_MAP;
+    }
+    set
+}
+
+/// The names of what `set` holds, `+`-separated (`diffuse+textures`); `none` when empty.
+pub fn label(set: u32) -> String {
+    let names: Vec<&str> = KINDS
+        .iter()
+        .map(|&(kind, name)| (kind_bit(kind), name))
+        .chain(FEATURES.iter().copied())
+        .filter(|(bit, _)| set & bit != 0)
+        .map(|(_, name)| name)
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join("+")
+    }
+}
