@@ -298,6 +298,13 @@ fn render(a: RenderArgs) -> Result<(), String> {
         ..
     } = configured;
     let budget = a.budget()?;
+    // Where the outputs go is checked before anything is loaded or rendered.
+    for path in [Some(&a.out), Some(&a.png), a.stats.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        output::check_destination(path).map_err(|e| e.to_string())?;
+    }
     let scene = a.load_scene()?;
     let scene_loaded = process_start.elapsed();
     // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
@@ -388,13 +395,19 @@ fn render(a: RenderArgs) -> Result<(), String> {
     // The two files are encoded at once, on two threads: at 1024x1024 each takes a tenth
     // of a second or more, as long as a short render itself (BENCHMARKS.md, session 17).
     let attributes = provenance.to_attributes();
+    // Both are written to temporary files first and put in place only when both were
+    // written: a failure leaves both existing files as they were.
     let (exr, png) = std::thread::scope(|threads| {
-        let png = threads.spawn(|| output::write_png(&a.png, &image, a.exposure));
-        let exr = output::write_exr(&a.out, &image, &attributes);
+        let png = threads.spawn(|| output::stage_png(&a.png, &image, a.exposure));
+        let exr = output::stage_exr(&a.out, &image, &attributes);
         (exr, png.join().expect("the PNG writer panicked"))
     });
-    exr.map_err(|e| e.to_string())?;
-    png.map_err(|e| e.to_string())?;
+    let (exr, png) = (
+        exr.map_err(|e| e.to_string())?,
+        png.map_err(|e| e.to_string())?,
+    );
+    exr.commit().map_err(|e| e.to_string())?;
+    png.commit().map_err(|e| e.to_string())?;
     let k = stats.kernel;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!(

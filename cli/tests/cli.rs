@@ -132,6 +132,32 @@ fn bad_input_fails_clearly_and_keeps_existing_outputs() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.xml") && err.contains(":3"), "{err}");
+    // An output whose directory does not exist fails before the render, naming the path,
+    // and the other output (written first, before this was checked) is untouched.
+    let out = cohort()
+        .args([
+            "render",
+            "--backend",
+            "cpu",
+            "--width",
+            "16",
+            "--height",
+            "16",
+        ])
+        .args(["--paths", "1"])
+        .arg("--out")
+        .arg(dir.join("no-such-dir").join("x.exr"))
+        .arg("--png")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no-such-dir") && err.contains("does not exist"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&png).unwrap(), b"good image");
 }
 
 /// Whole-group termination is reachable from the command line and recorded in the stats.

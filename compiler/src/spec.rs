@@ -29,7 +29,8 @@ pub enum Group {
     Warp,
     /// The whole workgroup of `n` invocations.
     Block(u32),
-    /// Every invocation of the dispatch: the host computes the value.
+    /// Every invocation of the dispatch: each computes the value of group 0 (its closure
+    /// reads only uniform values, so all agree), on the device.
     Grid,
 }
 

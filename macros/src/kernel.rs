@@ -409,26 +409,6 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     crate::host::host_block(&mut f.block);
     let (cpu_copy, cpu_invoke, cpu_workgroup_vars) = cpu_form(&f, &params);
 
-    // Host-computed group values (group = Grid): the closures of `group_share`, in
-    // source order, evaluated with the launch's uniform arguments in scope.
-    let grid_closures = collect_group_closures(&f.block);
-    let mut grid_uploads = Vec::new();
-    for (k, cl) in grid_closures.iter().enumerate() {
-        let buf = format_ident!("__group_share_{}", k);
-        let body = &cl.body;
-        let input = &cl.inputs[0];
-        grid_uploads.push(quote! {
-            let #buf = if __cohort_spec.group == ::cohort::Group::Grid {
-                #[allow(unused_variables)]
-                let value = (|#input: u32| #body)(0u32);
-                Some(__cohort_device.upload(::core::slice::from_ref(&value))?)
-            } else {
-                None
-            };
-            if let Some(b) = &#buf { __args.push(b.arg()); }
-        });
-    }
-
     // `len()` reads the element counts the launch passes (a binding the kernel has only when
     // it calls `len()`): an empty buffer is bound to a stand-in whose size the GPU would see.
     let lengths_upload = quote! {
@@ -581,7 +561,6 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 #(#uniform_uploads)*
                 #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
-                #(#grid_uploads)*
                 #lengths_arg
                 let __cohort_dispatch = ::cohort::launch::dispatch_of(__cohort_grid.into(), __cohort_spec, __cohort_device.info().max_workgroups_per_dim);
                 ::core::result::Result::Ok(__cohort_batch.dispatch(&__cohort_art, &__args, __cohort_dispatch)?)
@@ -599,7 +578,6 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                 #(#uniform_uploads)*
                 #lengths_upload
                 let mut __args: ::std::vec::Vec<::cohort::runtime::BufferArg<'_>> = ::std::vec![#(#launch_args),*];
-                #(#grid_uploads)*
                 #lengths_arg
                 let __cohort_dispatch = ::cohort::launch::dispatch_of(__cohort_grid.into(), __cohort_spec, __cohort_device.info().max_workgroups_per_dim);
                 ::core::result::Result::Ok(__cohort_device.dispatch(&__cohort_art, &__args, __cohort_dispatch)?)
@@ -709,27 +687,6 @@ fn cpu_form(f: &ItemFn, params: &[Param]) -> (TokenStream, TokenStream, TokenStr
     };
     let vars = quote!(::std::vec![#(#vars),*]);
     (copy.into_token_stream(), invoke, vars)
-}
-
-fn collect_group_closures(b: &syn::Block) -> Vec<syn::ExprClosure> {
-    use syn::visit::Visit;
-    struct V(Vec<syn::ExprClosure>);
-    impl<'ast> Visit<'ast> for V {
-        fn visit_expr_call(&mut self, c: &'ast syn::ExprCall) {
-            let is_share = matches!(&*c.func, syn::Expr::Path(p) if p.path.segments.last().is_some_and(|s| s.ident == "group_share"));
-            if is_share {
-                for a in &c.args {
-                    if let syn::Expr::Closure(cl) = a {
-                        self.0.push(cl.clone());
-                    }
-                }
-            }
-            syn::visit::visit_expr_call(self, c);
-        }
-    }
-    let mut v = V(Vec::new());
-    v.visit_block(b);
-    v.0
 }
 
 /// Whether `ty` names any of `names` (the kernel's generic type parameters).

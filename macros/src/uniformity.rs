@@ -43,7 +43,7 @@ const OR_NOTE: &str = "the non-uniform control flow starts here: the right side 
 pub struct Params {
     /// Names of parameters whose values are uniform (uniform buffers, uniform builtins).
     pub uniform: HashSet<String>,
-    /// Names of parameters that are uniform buffers (readable by host-computed closures).
+    /// Names of parameters that are uniform buffers (readable by grid-level closures).
     pub uniform_buffers: HashSet<String>,
     /// Names of parameters whose values differ between invocations (thread ids).
     pub nonuniform: HashSet<String>,
@@ -710,8 +710,8 @@ pub fn call_checks(
 }
 
 /// Checks that a `group_share` closure reads only its group index, uniform parameters
-/// and constants: for `group = Grid` the host runs it before the dispatch, where no
-/// other kernel value exists.
+/// and constants: for `group = Grid` every invocation computes the value of group 0,
+/// which is the same for all only if it reads nothing that differs between them.
 pub fn check_grid_closures(
     body: &Block,
     params: &Params,
@@ -769,7 +769,7 @@ pub fn check_grid_closures(
                         self.err = Some(syn::Error::new_spanned(
                             p,
                             format!(
-                                "`group_share` closures may read only their group index, uniform parameters and constants, not `{n}`: with `group = Grid` the host runs the closure before the dispatch (any kernel can be launched at `Grid` level)"
+                                "`group_share` closures may read only their group index, uniform parameters and constants, not `{n}`: with `group = Grid` every invocation computes the value of group 0, which must then be the same for all (any kernel can be launched at `Grid` level)"
                             ),
                         ));
                     }

@@ -183,7 +183,7 @@ fn upload<T: bytemuck::Pod>(device: &Device, data: &[T]) -> Result<GpuBuffer<T>,
 }
 
 // The kernels read the scenes crate's bytes through their own types: same sizes, same
-// field order (checked field by field in tests/layouts.rs).
+// field order (checked field by field, kinds and flags too, in `tests/layouts.rs`).
 const _: () =
     assert!(std::mem::size_of::<BvhNode>() == std::mem::size_of::<cohort_scenes::GpuBvhNode>());
 const _: () =

@@ -21,32 +21,85 @@ fn temp_beside(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// A file written to a temporary path beside its destination, not yet in place:
+/// [`commit`](Staged::commit) renames it over the destination; dropped uncommitted, it is
+/// removed. A run that writes several files stages them all first and commits them only
+/// when every one was written, so that a failure leaves every existing file as it was.
+#[must_use = "a staged file is removed unless committed"]
+pub struct Staged {
+    tmp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+impl Staged {
+    /// Puts the file in place.
+    pub fn commit(mut self) -> Result<(), OutputError> {
+        self.committed = true;
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| {
+            let _ = std::fs::remove_file(&self.tmp);
+            OutputError {
+                path: self.path.clone(),
+                message: e.to_string(),
+            }
+        })
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Fails unless `path` could be written: its directory exists. Checked before a render
+/// starts, so that a mistyped output path is reported in a second, not after the render.
+pub fn check_destination(path: &Path) -> Result<(), OutputError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(OutputError {
+                path: path.to_path_buf(),
+                message: format!("directory {} does not exist", dir.display()),
+            });
+        }
+    }
+    if path.is_dir() {
+        return Err(OutputError {
+            path: path.to_path_buf(),
+            message: "it is a directory".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Writes `path`'s content to a temporary file beside it with `write`: the [`Staged`] file
+/// to commit, or the error (and no file).
+pub fn stage(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<Staged, OutputError> {
+    check_destination(path)?;
+    let staged = Staged {
+        tmp: temp_beside(path),
+        path: path.to_path_buf(),
+        committed: false,
+    };
+    write(&staged.tmp).map_err(|message| OutputError {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    Ok(staged)
+}
+
 /// Writes `path` through a temporary file: `write` fills the temporary file, which is
 /// renamed over `path` only if it succeeded.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), String>,
 ) -> Result<(), OutputError> {
-    let err = |message: String| OutputError {
-        path: path.to_path_buf(),
-        message,
-    };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Err(err(format!("directory {} does not exist", dir.display())));
-        }
-    }
-    let tmp = temp_beside(path);
-    match write(&tmp) {
-        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            err(e.to_string())
-        }),
-        Err(m) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(err(m))
-        }
-    }
+    stage(path, write)?.commit()
 }
 
 /// Writes a linear EXR: channels R, G, B (each pixel's mean over its paths, in f32) and
@@ -58,8 +111,17 @@ pub fn write_exr(
     img: &Image,
     attributes: &[(String, String)],
 ) -> Result<(), OutputError> {
+    stage_exr(path, img, attributes)?.commit()
+}
+
+/// [`write_exr`], staged: the file is in place once committed.
+pub fn stage_exr(
+    path: &Path,
+    img: &Image,
+    attributes: &[(String, String)],
+) -> Result<Staged, OutputError> {
     use exr::prelude::*;
-    write_atomically(path, |tmp| {
+    stage(path, |tmp| {
         let channel = |name: &str, c: usize| {
             AnyChannel::new(
                 name,
@@ -100,8 +162,13 @@ fn srgb(linear: f32) -> u8 {
 
 /// Tone-maps with exposure `2^stops` and clamping, then encodes sRGB.
 pub fn write_png(path: &Path, img: &Image, stops: f32) -> Result<(), OutputError> {
+    stage_png(path, img, stops)?.commit()
+}
+
+/// [`write_png`], staged: the file is in place once committed.
+pub fn stage_png(path: &Path, img: &Image, stops: f32) -> Result<Staged, OutputError> {
     let scale = 2f32.powf(stops);
-    write_atomically(path, |tmp| {
+    stage(path, |tmp| {
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut enc = png::Encoder::new(std::io::BufWriter::new(file), img.width, img.height);
         enc.set_color(png::ColorType::Rgb);

@@ -6,8 +6,10 @@
 //! - `Warp`: lane 0 of each 32-invocation warp computes it; a subgroup broadcast shares
 //!   it where subgroups are 32 wide, workgroup memory and a barrier elsewhere;
 //! - `Block(n)`: invocation 0 of the workgroup computes it; workgroup memory + barrier;
-//! - `Grid`: the host computes it before the dispatch (the launch function calls the same
-//!   Rust closure) and passes it as a uniform.
+//! - `Grid`: every invocation computes it for group 0. The closure of a grid-level
+//!   value reads only uniform values (the front end checks it), so each computes the same
+//!   value, on the device: the host has no work between dispatches, and a batch of
+//!   iterations needs no upload per iteration.
 
 use naga::{AddressSpace, ArraySize, Barrier, Expression, GatherMode, Statement, TypeInner};
 
@@ -44,14 +46,7 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
     let global = Val::<u32>::from_handle(pro.global_index.expect("prologue"));
     match spec.group {
         Group::Thread => leader(global),
-        Group::Grid => {
-            let name = format!("group_share_{site}");
-            let ty = with(|c| T::naga_type(&mut c.module));
-            let (space, kind) = super::kernel::uniform_space();
-            let g = add_global(&name, space, ty, Some(kind));
-            let p = Place::<T>::from_handle(with(|c| c.expr(Expression::GlobalVariable(g))));
-            p.get()
-        }
+        Group::Grid => leader(lit(0u32)),
         Group::Block(_) => {
             let ty = with(|c| T::naga_type(&mut c.module));
             let g = add_global(
