@@ -13,6 +13,10 @@ pub mod ir;
 pub mod spec;
 
 pub use compile::{compile, CompileError, CompiledKernel};
+/// The naga this compiler builds on, for code that `#[derive(GpuType)]` generates in crates
+/// that use the compiler without the `cohort` facade (`cohort-layout`).
+#[doc(hidden)]
+pub use naga;
 pub use spec::{Group, KernelInfo, Spec, Target};
 
 #[cfg(test)]

@@ -6,25 +6,12 @@
 //! Interior children are consecutive nodes and a node's leaf triangles are consecutive, so a
 //! child is found from the node's two base indices and its slot's rank in a bit mask.
 
+/// The nodes this traversal reads (declared in `cohort-layout`).
+pub use crate::layout::CwNode;
 use crate::layout::*;
 use crate::traverse::{dominant_axis, leaf_hits, live_slot, rotate, NO_SLOT};
 use crate::traverse_wide::{permute8, HitQuery, STACK_SIZE};
 use cohort::prelude::*;
-
-/// A compressed 8-wide node (same bytes as `cohort_scenes::GpuCwNode`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
-#[repr(C)]
-pub struct CwNode {
-    /// Grid origin (f32 bits) in xyz; w: exponents of the grid steps (bytes 0..=2) and the
-    /// leaf-slot mask (byte 3).
-    pub a: UVec4,
-    /// First interior child, first leaf triangle, 4-bit triangle count per slot, interior-slot mask.
-    pub b: UVec4,
-    /// 8-bit planes: low plane of slots 0..=3, 4..=7, high plane of slots 0..=3, 4..=7.
-    pub qx: UVec4,
-    pub qy: UVec4,
-    pub qz: UVec4,
-}
 
 /// The four bytes of `w` as floats (byte 0 first).
 #[kernel_fn]

@@ -7,26 +7,12 @@
 //! box test is the same conservative slab test (far distance scaled by 1 + 2γ(3)), with the
 //! slab ends ordered by the sign of the inverse direction instead of a min/max.
 
+/// The node records this traversal reads (declared in `cohort-layout`).
+pub use crate::layout::WideNode;
 use crate::layout::*;
 use crate::shadow::finish_slot;
 use crate::traverse::{dominant_axis, leaf_hits, live_slot, rotate, NO_SLOT};
 use cohort::prelude::*;
-
-/// Four children of an 8-wide node (same bytes as `cohort_scenes::GpuWideNode`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
-#[repr(C)]
-pub struct WideNode {
-    pub lo_x: Vec4,
-    pub hi_x: Vec4,
-    pub lo_y: Vec4,
-    pub hi_y: Vec4,
-    pub lo_z: Vec4,
-    pub hi_z: Vec4,
-    /// Child references (bit 31 set: leaf, as in the BVH2; else the child's first record).
-    pub child: UVec4,
-    /// First record: leaf-child masks in octant order, one byte per octant (x: 0..3, y: 4..7).
-    pub meta: UVec4,
-}
 
 /// Stack entries per invocation (the builder checks its bound against this:
 /// `cohort_scenes::bvh::wide::STACK_SIZE`).

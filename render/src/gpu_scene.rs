@@ -1,5 +1,5 @@
 //! The scene on the device: BVH nodes, triangles in leaf order and materials, in the
-//! layouts of `cohort_kernels::layout` (byte-identical to `cohort-scenes`' GPU types).
+//! layouts of `cohort-layout`, which the scene builder writes and the kernels read.
 
 use cohort::runtime::{Device, GpuBuffer, RuntimeError};
 use cohort_kernels::layout::{BvhNode, DeltaLight, LightEntry, Material, Triangle};
@@ -76,11 +76,10 @@ impl GpuScene {
         wide: Option<&GpuBvh8>,
     ) -> Result<GpuScene, RuntimeError> {
         let started = std::time::Instant::now();
-        let nodes: &[BvhNode] = cast(&bvh.nodes);
-        let mut tris: Vec<Triangle> = cast(&bvh.triangles).to_vec();
+        let nodes: &[BvhNode] = &bvh.nodes;
+        let mut tris: Vec<Triangle> = bvh.triangles.clone();
         let lights = crate::lights::build(scene, &mut tris);
         let mats = scene.gpu_materials();
-        let mats: &[Material] = cast(&mats);
         let normals: Vec<glam::Vec4> = scene
             .triangles
             .normals
@@ -133,7 +132,7 @@ impl GpuScene {
         let delta = cohort_kernels::layout::DELTA_LIGHT;
         let has_delta = (lights.entries.iter().take(lights.count as usize))
             .any(|e| e.tri & delta != 0 || e.alias_tri & delta != 0);
-        let shading = cohort_kernels::shading::shading_set(mats, has_delta, env_map != 0);
+        let shading = cohort_kernels::shading::shading_set(&mats, has_delta, env_map != 0);
         Ok(GpuScene {
             shading,
             tex_coords: upload(device, &tex_coords)?,
@@ -141,7 +140,7 @@ impl GpuScene {
             env_map,
             nodes: upload(device, nodes)?,
             triangles: upload(device, &tris)?,
-            materials: upload(device, mats)?,
+            materials: upload(device, &mats)?,
             has_shading_normals: !normals.is_empty(),
             shading_normals: upload(device, &normals)?,
             triangle_count: tris.len(),
@@ -153,21 +152,10 @@ impl GpuScene {
             upload: started.elapsed(),
             bounds: [bvh.bounds_min, bvh.bounds_max],
             nodes8: match wide {
-                Some(w) => Some(upload::<WideNode>(device, cast(&w.nodes))?),
+                Some(w) => Some(upload::<WideNode>(device, &w.nodes)?),
                 None => None,
             },
         })
-    }
-}
-
-/// `bytemuck::cast_slice` that also takes an empty slice: an empty `Vec`'s dangling pointer is
-/// aligned only for its own element type, and `cast_slice` panics when the target type is more
-/// aligned (an empty scene has no nodes, triangles or materials).
-fn cast<A: bytemuck::Pod, B: bytemuck::Pod>(a: &[A]) -> &[B] {
-    if a.is_empty() {
-        &[]
-    } else {
-        bytemuck::cast_slice(a)
     }
 }
 
@@ -181,14 +169,3 @@ fn upload<T: bytemuck::Pod>(device: &Device, data: &[T]) -> Result<GpuBuffer<T>,
         device.upload(data)
     }
 }
-
-// The kernels read the scenes crate's bytes through their own types: same sizes, same
-// field order (checked field by field, kinds and flags too, in `tests/layouts.rs`).
-const _: () =
-    assert!(std::mem::size_of::<BvhNode>() == std::mem::size_of::<cohort_scenes::GpuBvhNode>());
-const _: () =
-    assert!(std::mem::size_of::<Triangle>() == std::mem::size_of::<cohort_scenes::GpuTriangle>());
-const _: () =
-    assert!(std::mem::size_of::<Material>() == std::mem::size_of::<cohort_scenes::GpuMaterial>());
-const _: () =
-    assert!(std::mem::size_of::<WideNode>() == std::mem::size_of::<cohort_scenes::GpuWideNode>());

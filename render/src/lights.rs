@@ -307,7 +307,7 @@ mod tests {
         </scene>"#;
         let scene = cohort_scenes::load_mitsuba_str(xml, ".").unwrap().scene;
         let bvh = cohort_scenes::GpuBvh::build(&scene).unwrap();
-        let mut tris: Vec<Triangle> = bytemuck::cast_slice(&bvh.triangles).to_vec();
+        let mut tris: Vec<Triangle> = bvh.triangles.clone();
         let t = build(&scene, &mut tris);
         // Two rectangles, the point light, the environment: a quarter each (the table
         // draws among the first three, once the environment is not chosen).

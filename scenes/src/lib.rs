@@ -6,12 +6,16 @@
 //!                         ├─► TriMesh ─► SceneBuilder ─► Scene (scene.rs: camera, triangles, materials)
 //! embedded generators ────┘                                  │
 //!                                                            ▼
-//!                                  bvh/: obvhs PLOC BVH2 ─► GpuBvh { nodes, triangles } + GpuMaterial
+//!                                  bvh/: obvhs PLOC BVH2 ─► GpuBvh { nodes, triangles } + materials
 //!                                                            │  (bytemuck, std430/WGSL layouts)
 //!                                                            ▼
 //!                                  renderer kernels (other crates); host reference traversal here
 //! ```
 //! `morton.rs` gives the pixel order the renderer lays its rays out in.
+
+/// The GPU types this crate writes (BVH nodes, triangles, materials and their constants),
+/// declared once for the scene builder and the kernels.
+pub use cohort_layout as layout;
 
 pub mod alias;
 pub mod builder;
@@ -39,17 +43,14 @@ pub mod texture;
 
 pub use builder::{Added, SceneBuilder, Shading};
 pub use bvh::{
-    brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, BvhError, GpuBvh,
-    GpuBvhNode, GpuTriangle, Hit,
+    brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, BvhError, GpuBvh, Hit,
 };
-pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, GpuCwNode, GpuWideNode, WideBvhError};
+pub use bvh::{closest_hit8, GpuBvh8, GpuCwBvh, WideBvhError};
 pub use camera::{Camera, CameraFrame, CropWindow, FovAxis, Projection};
 pub use environment_map::EnvironmentMap;
 pub use error::{ErrorKind, Location, Position, SceneError, Warning};
 pub use film_filter::{FilmFilter, FilterKind};
-pub use material::{
-    Bsdf, GpuMaterial, Mask, Material, Perturb, PerturbKind, Principled, Roughness,
-};
+pub use material::{Bsdf, Mask, Material, Perturb, PerturbKind, Principled, Roughness};
 pub use mesh::{MeshAttribute, TriMesh};
 pub use mitsuba::{
     load_mitsuba, load_mitsuba_str, load_mitsuba_str_with, load_mitsuba_with,

@@ -1,6 +1,7 @@
 //! Surface materials of a [`crate::Scene`] (the Mitsuba BSDF subset the renderer implements) and
 //! their packed GPU form, uploaded next to the BVH arrays and indexed by each triangle's material.
 
+use crate::layout;
 use glam::Vec3;
 
 /// The scattering part of a material.
@@ -96,7 +97,7 @@ impl Roughness {
     }
 
     /// One number everywhere and in every direction: the kernels read it from
-    /// `GpuMaterial::param` and need no parameter block.
+    /// `Material::param` of the GPU layout and need no parameter block.
     pub fn is_constant_isotropic(&self) -> bool {
         self.u == self.v && self.u_texture.is_none() && self.v_texture.is_none()
     }
@@ -378,18 +379,18 @@ impl Material {
         matches!(self.bsdf, Bsdf::Diffuse { .. })
     }
 
-    pub fn to_gpu(&self) -> GpuMaterial {
+    pub fn to_gpu(&self) -> layout::Material {
         let mut flags = 0;
         let mut conductor_k = Vec3::ZERO;
         let (kind, color, transmittance, param) = match self.bsdf {
-            Bsdf::Diffuse { reflectance } => (GpuMaterial::DIFFUSE, reflectance, Vec3::ZERO, 0.0),
+            Bsdf::Diffuse { reflectance } => (layout::DIFFUSE, reflectance, Vec3::ZERO, 0.0),
             Bsdf::Conductor {
                 specular_reflectance,
                 eta,
                 k,
             } => {
                 conductor_k = k;
-                (GpuMaterial::CONDUCTOR, specular_reflectance, eta, 0.0)
+                (layout::CONDUCTOR, specular_reflectance, eta, 0.0)
             }
             Bsdf::RoughConductor {
                 alpha,
@@ -400,14 +401,9 @@ impl Material {
             } => {
                 conductor_k = k;
                 if distribution == Microfacet::Beckmann {
-                    flags |= GpuMaterial::FLAG_BECKMANN;
+                    flags |= layout::BECKMANN;
                 }
-                (
-                    GpuMaterial::ROUGH_CONDUCTOR,
-                    specular_reflectance,
-                    eta,
-                    alpha.u,
-                )
+                (layout::ROUGH_CONDUCTOR, specular_reflectance, eta, alpha.u)
             }
             Bsdf::Dielectric {
                 int_ior,
@@ -415,7 +411,7 @@ impl Material {
                 specular_reflectance,
                 specular_transmittance,
             } => (
-                GpuMaterial::DIELECTRIC,
+                layout::DIELECTRIC,
                 specular_reflectance,
                 specular_transmittance,
                 int_ior / ext_ior,
@@ -427,10 +423,10 @@ impl Material {
                 nonlinear,
             } => {
                 if nonlinear {
-                    flags |= GpuMaterial::FLAG_NONLINEAR;
+                    flags |= layout::NONLINEAR;
                 }
                 (
-                    GpuMaterial::PLASTIC,
+                    layout::PLASTIC,
                     diffuse_reflectance,
                     specular_reflectance,
                     eta,
@@ -444,11 +440,11 @@ impl Material {
                 specular_transmittance,
             } => {
                 if distribution == Microfacet::Beckmann {
-                    flags |= GpuMaterial::FLAG_BECKMANN;
+                    flags |= layout::BECKMANN;
                 }
                 conductor_k = Vec3::new(alpha.u, 0.0, 0.0);
                 (
-                    GpuMaterial::ROUGH_DIELECTRIC,
+                    layout::ROUGH_DIELECTRIC,
                     specular_reflectance,
                     specular_transmittance,
                     eta,
@@ -465,14 +461,14 @@ impl Material {
                 table: _,
             } => {
                 if nonlinear {
-                    flags |= GpuMaterial::FLAG_NONLINEAR;
+                    flags |= layout::NONLINEAR;
                 }
                 if distribution == Microfacet::Beckmann {
-                    flags |= GpuMaterial::FLAG_BECKMANN;
+                    flags |= layout::BECKMANN;
                 }
                 conductor_k = Vec3::new(alpha, internal_reflectance, 0.0);
                 (
-                    GpuMaterial::ROUGH_PLASTIC,
+                    layout::ROUGH_PLASTIC,
                     diffuse_reflectance,
                     specular_reflectance,
                     eta,
@@ -480,39 +476,39 @@ impl Material {
             }
             Bsdf::Principled(params) => {
                 let kind = if params.thin {
-                    GpuMaterial::PRINCIPLED_THIN
+                    layout::PRINCIPLED_THIN
                 } else {
-                    GpuMaterial::PRINCIPLED
+                    layout::PRINCIPLED
                 };
                 (kind, params.base_color, Vec3::ZERO, params.eta)
             }
         };
         if self.two_sided {
-            flags |= GpuMaterial::FLAG_TWO_SIDED;
+            flags |= layout::TWO_SIDED;
         }
         if self.emission.is_some() {
-            flags |= GpuMaterial::FLAG_EMITTER;
+            flags |= layout::EMITTER;
         }
         if self.mask.is_some() {
-            flags |= GpuMaterial::FLAG_MASKED;
+            flags |= layout::MASKED;
         }
         let mut bump_scale = 0.0;
         if let Some(p) = self.perturb {
             flags |= match p.kind {
-                PerturbKind::Normal => GpuMaterial::FLAG_NORMAL_MAP,
+                PerturbKind::Normal => layout::NORMAL_MAP,
                 PerturbKind::Bump { scale } => {
                     bump_scale = scale;
-                    GpuMaterial::FLAG_BUMP_MAP
+                    layout::BUMP_MAP
                 }
             };
             if !p.shadowing {
-                flags |= GpuMaterial::FLAG_NO_SHADOWING;
+                flags |= layout::NO_SHADOWING;
             }
             if !p.flip_invalid {
-                flags |= GpuMaterial::FLAG_NO_FLIP;
+                flags |= layout::NO_FLIP;
             }
             if p.per_side {
-                flags |= GpuMaterial::FLAG_PERTURB_PER_SIDE;
+                flags |= layout::PERTURB_PER_SIDE;
             }
         }
         let reads_uv = match self.bsdf {
@@ -523,16 +519,16 @@ impl Material {
             _ => false,
         };
         if reads_uv {
-            flags |= GpuMaterial::FLAG_READS_UV;
+            flags |= layout::READS_UV;
         }
-        GpuMaterial {
-            color: color.to_array(),
+        layout::Material {
+            color,
             kind,
-            emission: self.emission.unwrap_or(Vec3::ZERO).to_array(),
+            emission: self.emission.unwrap_or(Vec3::ZERO),
             flags,
-            transmittance: transmittance.to_array(),
+            transmittance,
             param,
-            conductor_k: conductor_k.to_array(),
+            conductor_k,
             // Set by `Scene::gpu_materials`, which knows where the textures go.
             texture: 0,
             opacity: self.mask.map_or(1.0, |m| m.opacity),
@@ -543,83 +539,12 @@ impl Material {
             blend_weight: 0.0,
             blend_texture: 0,
             emission_texture: 0,
-            pad: [0; 3],
+            pad_a: 0,
+            pad_b: 0,
+            pad_c: 0,
             // Set by `Scene::gpu_materials`.
             perturb_texture: 0,
             bump_scale,
         }
     }
 }
-
-/// Packed material, 96 bytes, std430/WGSL compatible (each `[f32; 3]` + 4-byte scalar fills one
-/// 16-byte slot):
-///
-/// | offset | field | meaning |
-/// |---|---|---|
-/// | 0 | `color: [f32;3]` | diffuse reflectance (diffuse, plastic), or specular reflectance (conductors, dielectric) |
-/// | 12 | `kind: u32` | `DIFFUSE` 0, `CONDUCTOR` 1, `ROUGH_CONDUCTOR` 2, `DIELECTRIC` 3, `PLASTIC` 4, `ROUGH_PLASTIC` 5, `ROUGH_DIELECTRIC` 6, `PRINCIPLED` 7, `PRINCIPLED_THIN` 8 |
-/// | 16 | `emission: [f32;3]` | area-light radiance (front side only), zero if none |
-/// | 28 | `flags: u32` | bit 0 two-sided, bit 1 emitter, bit 2 nonlinear (plastic), bit 3 Beckmann (rough conductor; else GGX), bit 4 masked, bit 5 normal map, bit 6 bump map, bit 7 no shadowing term, bit 8 no flip of invalid normals, bit 9 perturbation per side (`Perturb`), bit 10 reads the hit's texture coordinates (textured parameters, anisotropy) |
-/// | 32 | `transmittance: [f32;3]` | dielectric specular transmittance, plastic specular reflectance, conductor eta, else zero |
-/// | 44 | `param: f32` | microfacet alpha (rough conductor) or relative IOR int/ext (dielectric, plastic) |
-/// | 48 | `conductor_k: [f32;3]` | conductor k (the imaginary part of its index); rough plastic (alpha, internal reflectance, 0); rough dielectric (alpha, 0, 0); else zero |
-/// | 60 | `texture: u32` | index + 1 of the header of the texture of `color` (diffuse, plastic) in `Scene::gpu_textures`, 0 for none |
-/// | 64 | `opacity: f32` | Mitsuba `mask` (flag bit 4): probability that the surface scatters; 1 without a mask |
-/// | 68 | `opacity_texture: u32` | index + 1 of the header of the opacity's texture (its luminance), 0 for none |
-/// | 72 | `table: u32` | rough plastic: index + 1 of the header of its transmittance table (a 64 x 1 texture); principled: index + 1 of its parameter block (`Principled::gpu_block`); rough conductor or rough dielectric with anisotropic or textured roughness: index + 1 of its block (`Roughness::gpu_block`); else 0 |
-/// | 76 | `blend: u32` | Mitsuba `blendbsdf`: index + 1 of the material that scatters instead with probability `blend_weight`, else 0 |
-/// | 80 | `blend_weight: f32` | that probability |
-/// | 84 | `perturb_texture: u32` | normal or bump map (flag bit 5 or 6): index + 1 of its texture's header, else 0 |
-/// | 88 | `bump_scale: f32` | bump map: Mitsuba's `scale` |
-/// | 92 | `blend_texture: u32` | `blendbsdf` with a textured weight: index + 1 of its texture's header (its luminance, clamped, replaces `blend_weight`), else 0 |
-/// | 96 | `emission_texture: u32` | index + 1 of the header of the texture that gives an area emitter's radiance per point (`Material::emission_texture`); 0: `emission` everywhere |
-/// | 100 | `pad: [u32; 3]` | |
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuMaterial {
-    pub color: [f32; 3],
-    pub kind: u32,
-    pub emission: [f32; 3],
-    pub flags: u32,
-    pub transmittance: [f32; 3],
-    pub param: f32,
-    pub conductor_k: [f32; 3],
-    pub texture: u32,
-    pub opacity: f32,
-    pub opacity_texture: u32,
-    pub table: u32,
-    pub blend: u32,
-    pub blend_weight: f32,
-    pub perturb_texture: u32,
-    pub bump_scale: f32,
-    pub blend_texture: u32,
-    pub emission_texture: u32,
-    pub pad: [u32; 3],
-}
-
-impl GpuMaterial {
-    pub const DIFFUSE: u32 = 0;
-    pub const CONDUCTOR: u32 = 1;
-    pub const ROUGH_CONDUCTOR: u32 = 2;
-    pub const DIELECTRIC: u32 = 3;
-    pub const PLASTIC: u32 = 4;
-    pub const ROUGH_PLASTIC: u32 = 5;
-    pub const ROUGH_DIELECTRIC: u32 = 6;
-    pub const PRINCIPLED: u32 = 7;
-    pub const PRINCIPLED_THIN: u32 = 8;
-    pub const FLAG_TWO_SIDED: u32 = 1;
-    pub const FLAG_EMITTER: u32 = 2;
-    pub const FLAG_NONLINEAR: u32 = 4;
-    pub const FLAG_BECKMANN: u32 = 8;
-    pub const FLAG_MASKED: u32 = 16;
-    pub const FLAG_NORMAL_MAP: u32 = 32;
-    pub const FLAG_BUMP_MAP: u32 = 64;
-    pub const FLAG_NO_SHADOWING: u32 = 128;
-    pub const FLAG_NO_FLIP: u32 = 256;
-    pub const FLAG_PERTURB_PER_SIDE: u32 = 512;
-    /// The BSDF reads parameters (textures) or turns with dp/du at the hit's texture
-    /// coordinates.
-    pub const FLAG_READS_UV: u32 = 1024;
-}
-
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 112);

@@ -195,10 +195,10 @@ impl Scene {
         }
     }
 
-    /// Packed material table, indexed by [`crate::GpuTriangle::material`].
+    /// Packed material table, indexed by [`crate::layout::Triangle::material`].
     /// The materials in the kernels' layout; a textured one refers to its texture's header in
     /// [`Scene::gpu_textures`] (`texture` = header index + 1, 0 without a texture).
-    pub fn gpu_materials(&self) -> Vec<crate::GpuMaterial> {
+    pub fn gpu_materials(&self) -> Vec<crate::layout::Material> {
         let starts = crate::texture::gpu_texture_starts(&self.textures);
         let mut block_at = self.gpu_blocks_start();
         self.materials
@@ -256,7 +256,7 @@ impl Scene {
         data
     }
 
-    /// Material `m`'s parameter block in [`Scene::gpu_textures`] (`GpuMaterial::table` =
+    /// Material `m`'s parameter block in [`Scene::gpu_textures`] (`layout::table` =
     /// its start + 1), if it has one: a principled BSDF's (`Principled::gpu_block`), or a
     /// rough conductor's or rough dielectric's roughness where that is not one constant
     /// (`Roughness::gpu_block`).

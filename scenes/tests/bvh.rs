@@ -96,9 +96,9 @@ fn check_layout(scene: &Scene, bvh: &GpuBvh) {
     for t in &bvh.triangles {
         assert!(!std::mem::replace(&mut seen[t.original as usize], true));
         assert_eq!(t.material, scene.triangles.materials[t.original as usize]);
-        assert_eq!(t.pad, 0);
+        assert_eq!(t.light_pdf, 0.0);
         let v = scene.triangles.vertices(t.original as usize);
-        assert_eq!([t.v0, t.v1, t.v2], v.map(|p| p.to_array()));
+        assert_eq!([t.v0, t.v1, t.v2], v);
     }
     let mut stack = vec![(0u32, 0u32)];
     while let Some((node, depth)) = stack.pop() {
@@ -106,14 +106,12 @@ fn check_layout(scene: &Scene, bvh: &GpuBvh) {
         let n = &bvh.nodes[node as usize];
         assert_eq!((n.pad0, n.pad1), (0, 0));
         for (child, lo, hi) in [(n.left, n.lmin, n.lmax), (n.right, n.rmin, n.rmax)] {
-            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
             if is_leaf(child) {
                 let (first, count) = decode_leaf(child);
                 assert!((1..=MAX_LEAF_TRIANGLES).contains(&count));
                 assert!((first + count) as usize <= bvh.triangles.len());
                 for t in &bvh.triangles[first as usize..(first + count) as usize] {
                     for v in [t.v0, t.v1, t.v2] {
-                        let v = Vec3::from(v);
                         assert!(v.cmpge(lo).all() && v.cmple(hi).all());
                     }
                 }

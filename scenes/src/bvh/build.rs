@@ -11,7 +11,8 @@ use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 
-use super::{leaf_ref, GpuBvh, GpuBvhNode, GpuTriangle, MAX_LEAF_TRIANGLES, MAX_TRIANGLES};
+use super::{leaf_ref, GpuBvh, MAX_LEAF_TRIANGLES, MAX_TRIANGLES};
+use crate::layout;
 use crate::scene::Triangles;
 
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -77,7 +78,7 @@ pub(super) fn build_with(
     if root.is_leaf() {
         // A single leaf has no interior node to hold its box: give it a root whose two children are
         // that same leaf (testing it twice cannot change a closest hit).
-        out.nodes.push(GpuBvhNode::default());
+        out.nodes.push(layout::BvhNode::default());
         let (child, lo, hi) = out.child(0, 1);
         out.nodes[0] = node(child, lo, hi, child, lo, hi);
         out.depth = out.depth.max(1);
@@ -94,15 +95,15 @@ pub(super) fn build_with(
     })
 }
 
-fn node(left: u32, lmin: Vec3, lmax: Vec3, right: u32, rmin: Vec3, rmax: Vec3) -> GpuBvhNode {
-    GpuBvhNode {
-        lmin: lmin.to_array(),
+fn node(left: u32, lmin: Vec3, lmax: Vec3, right: u32, rmin: Vec3, rmax: Vec3) -> layout::BvhNode {
+    layout::BvhNode {
+        lmin,
         left,
-        lmax: lmax.to_array(),
+        lmax,
         right,
-        rmin: rmin.to_array(),
+        rmin,
         pad0: 0,
-        rmax: rmax.to_array(),
+        rmax,
         pad1: 0,
     }
 }
@@ -111,8 +112,8 @@ struct Flattener<'a> {
     src: &'a Bvh2,
     tris: &'a Triangles,
     aabbs: &'a [Aabb],
-    nodes: Vec<GpuBvhNode>,
-    triangles: Vec<GpuTriangle>,
+    nodes: Vec<layout::BvhNode>,
+    triangles: Vec<layout::Triangle>,
     depth: u32,
 }
 
@@ -121,7 +122,7 @@ impl Flattener<'_> {
     fn interior(&mut self, id: usize, depth: u32) -> u32 {
         self.depth = self.depth.max(depth);
         let index = self.nodes.len() as u32;
-        self.nodes.push(GpuBvhNode::default());
+        self.nodes.push(layout::BvhNode::default());
         let first = self.src.nodes[id].first_index as usize;
         let (l, lmin, lmax) = self.child(first, depth + 1);
         let (r, rmin, rmax) = self.child(first + 1, depth + 1);
@@ -155,20 +156,20 @@ impl Flattener<'_> {
             let first = self.triangles.len() as u32;
             for &p in prims {
                 let [v0, v1, v2] = self.tris.vertices(p as usize);
-                self.triangles.push(GpuTriangle {
-                    v0: v0.to_array(),
+                self.triangles.push(layout::Triangle {
+                    v0,
                     material: self.tris.materials[p as usize],
-                    v1: v1.to_array(),
+                    v1,
                     original: p,
-                    v2: v2.to_array(),
-                    pad: 0,
+                    v2,
+                    light_pdf: 0.0,
                 });
             }
             return (leaf_ref(first, prims.len() as u32), lo, hi);
         }
         self.depth = self.depth.max(depth);
         let index = self.nodes.len() as u32;
-        self.nodes.push(GpuBvhNode::default());
+        self.nodes.push(layout::BvhNode::default());
         let (a, b) = prims.split_at(prims.len() / 2);
         let (l, lmin, lmax) = self.leaf(a, depth + 1);
         let (r, rmin, rmax) = self.leaf(b, depth + 1);

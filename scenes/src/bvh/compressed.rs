@@ -4,7 +4,7 @@
 //! node's own grid. Built from [`GpuBvh8`]: the same children in the same slots, so a
 //! traversal visits them in the same octant order; only the storage changes.
 //!
-//! # GPU layout ([`GpuCwNode`], five 16-byte words)
+//! # GPU layout ([`layout::CwNode`], five 16-byte words)
 //! | word | contents |
 //! |---|---|
 //! | `a` | `p.x, p.y, p.z` (f32 bits): the grid origin; `a.w`: the grid's power-of-two scale per axis as biased f32 exponents in bytes 0, 1, 2, and the leaf-slot mask in byte 3 |
@@ -25,25 +25,16 @@
 use glam::Vec3;
 
 use super::wide::{EMPTY_SLOT, WIDTH};
-use super::{decode_leaf, is_leaf, leaf_ref, GpuBvh, GpuBvh8, GpuTriangle};
+use super::{decode_leaf, is_leaf, leaf_ref, GpuBvh, GpuBvh8};
+use crate::layout;
 
-/// One compressed 8-wide node (80 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuCwNode {
-    pub a: [u32; 4],
-    pub b: [u32; 4],
-    pub qx: [u32; 4],
-    pub qy: [u32; 4],
-    pub qz: [u32; 4],
-}
-
-const _: () = assert!(std::mem::size_of::<GpuCwNode>() == 80);
+// One compressed 8-wide node (`layout::CwNode`) is 80 bytes.
+const _: () = assert!(std::mem::size_of::<layout::CwNode>() == 80);
 
 /// The compressed nodes; node 0 is the root. Triangles are the (reordered) BVH2's.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GpuCwBvh {
-    pub nodes: Vec<GpuCwNode>,
+    pub nodes: Vec<layout::CwNode>,
 }
 
 /// Margin of the outward rounding, in grid steps (see the module docs).
@@ -58,30 +49,30 @@ impl GpuCwBvh {
         if wide.nodes.is_empty() {
             return out;
         }
-        let mut triangles: Vec<GpuTriangle> = Vec::with_capacity(bvh.triangles.len());
+        let mut triangles: Vec<layout::Triangle> = Vec::with_capacity(bvh.triangles.len());
         // Old leaf reference -> new one.
         let mut moved = std::collections::HashMap::new();
         // Breadth first: a node's interior children get consecutive indices when it is emitted.
         let mut queue = std::collections::VecDeque::from([0u32]);
-        out.nodes.push(GpuCwNode::default());
+        out.nodes.push(layout::CwNode::default());
         let mut next = 0usize;
         while let Some(w) = queue.pop_front() {
             let slots = wide_slots(wide, w);
             let index = next;
             next += 1;
-            let mut node = GpuCwNode::default();
+            let mut node = layout::CwNode::default();
             let (lo, hi) = slots.iter().flatten().fold(
                 (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
                 |(lo, hi), c| (lo.min(c.1), hi.max(c.2)),
             );
             let grid = Grid::new(lo, hi);
-            node.a = [
+            node.a = glam::UVec4::new(
                 grid.p.x.to_bits(),
                 grid.p.y.to_bits(),
                 grid.p.z.to_bits(),
                 0,
-            ];
-            node.b = [out.nodes.len() as u32, triangles.len() as u32, 0, 0];
+            );
+            node.b = glam::UVec4::new(out.nodes.len() as u32, triangles.len() as u32, 0, 0);
             let mut leaf_mask = 0u32;
             let mut exps = 0u32;
             for (axis, e) in grid.exponent.iter().enumerate() {
@@ -103,7 +94,7 @@ impl GpuCwBvh {
                         } else {
                             node.b[3] |= 1 << s;
                             queue.push_back(*r);
-                            out.nodes.push(GpuCwNode::default());
+                            out.nodes.push(layout::CwNode::default());
                         }
                         grid.quantise(*lo, *hi)
                     }
@@ -132,7 +123,7 @@ impl GpuCwBvh {
             remap(&mut n.right);
         }
         for rec in &mut wide.nodes {
-            rec.child.iter_mut().for_each(remap);
+            rec.child.as_mut().iter_mut().for_each(remap);
         }
         out
     }
@@ -150,7 +141,7 @@ impl GpuCwBvh {
             f32::from_bits(node.a[2]),
         );
         let scale = |axis: usize| f32::from_bits(((node.a[3] >> (8 * axis)) & 0xff) << 23);
-        let byte = |q: &[u32; 4], w: usize| ((q[w + s / 4] >> (8 * (s % 4))) & 0xff) as f32;
+        let byte = |q: &glam::UVec4, w: usize| ((q[w + s / 4] >> (8 * (s % 4))) & 0xff) as f32;
         let lo = Vec3::new(byte(&node.qx, 0), byte(&node.qy, 0), byte(&node.qz, 0));
         let hi = Vec3::new(byte(&node.qx, 2), byte(&node.qy, 2), byte(&node.qz, 2));
         let s3 = Vec3::new(scale(0), scale(1), scale(2));

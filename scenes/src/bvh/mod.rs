@@ -3,22 +3,22 @@
 //!
 //! # GPU layout
 //! Two storage buffers, both arrays of 16-byte-aligned `#[repr(C)]` structs that are valid std430
-//! and WGSL structs as written (every `[f32; 3]` is followed by a 4-byte scalar, i.e. WGSL
+//! and WGSL structs as written (every `Vec3` is followed by a 4-byte scalar, i.e. WGSL
 //! `vec3<f32>` + `u32` filling one 16-byte slot).
 //!
-//! **Nodes** ([`GpuBvhNode`], 64 bytes): a BVH2 whose interior node holds BOTH children's boxes, so one
+//! **Nodes** ([`layout::BvhNode`], 64 bytes): a BVH2 whose interior node holds BOTH children's boxes, so one
 //! node fetch lets a thread test two boxes and pick the nearer child. Node 0 is the root. The root's
 //! own box is not stored (see [`GpuBvh::bounds_min`]).
 //!
 //! | offset | field | |
 //! |---|---|---|
-//! | 0 | `lmin: [f32; 3]` | left child box min |
+//! | 0 | `lmin: Vec3` | left child box min |
 //! | 12 | `left: u32` | left child reference |
-//! | 16 | `lmax: [f32; 3]` | left child box max |
+//! | 16 | `lmax: Vec3` | left child box max |
 //! | 28 | `right: u32` | right child reference |
-//! | 32 | `rmin: [f32; 3]` | right child box min |
+//! | 32 | `rmin: Vec3` | right child box min |
 //! | 44 | `pad0: u32` | zero |
-//! | 48 | `rmax: [f32; 3]` | right child box max |
+//! | 48 | `rmax: Vec3` | right child box max |
 //! | 60 | `pad1: u32` | zero |
 //!
 //! **Child reference** (`u32`): bit 31 clear = interior node, the value is its index in `nodes`.
@@ -27,16 +27,16 @@
 //! A reference is self-contained, so a traversal stack of plain `u32` can hold leaves too.
 //! (See [`leaf_ref`], [`decode_leaf`].) Up to 2^28 - 1 triangles.
 //!
-//! **Triangles** ([`GpuTriangle`], 48 bytes), reordered into leaf order:
+//! **Triangles** ([`layout::Triangle`], 48 bytes), reordered into leaf order:
 //!
 //! | offset | field | |
 //! |---|---|---|
-//! | 0 | `v0: [f32; 3]` | vertex 0 |
-//! | 12 | `material: u32` | index into the material table ([`crate::GpuMaterial`]) |
-//! | 16 | `v1: [f32; 3]` | vertex 1 |
+//! | 0 | `v0: Vec3` | vertex 0 |
+//! | 12 | `material: u32` | index into the material table ([`crate::layout::Material`]) |
+//! | 16 | `v1: Vec3` | vertex 1 |
 //! | 28 | `original: u32` | index of the triangle in [`crate::Scene::triangles`] (normals, objects) |
-//! | 32 | `v2: [f32; 3]` | vertex 2 |
-//! | 44 | `pad: u32` | zero |
+//! | 32 | `v2: Vec3` | vertex 2 |
+//! | 44 | `light_pdf: f32` | zero here; the renderer's light table fills it |
 //!
 //! Vertices rather than precomputed edges: the watertight test (Woop, Benthin, Wald 2013) needs the
 //! exact vertices, because `v0 + e1` rounds differently in neighbouring triangles and would reopen
@@ -47,39 +47,18 @@ pub mod compressed;
 mod traverse;
 pub mod wide;
 
+use crate::layout;
 use glam::Vec3;
 
 pub use build::BvhError;
-pub use compressed::{GpuCwBvh, GpuCwNode};
+pub use compressed::GpuCwBvh;
 pub use traverse::{brute_force_closest_hit, closest_hit, intersect_triangle, BruteForce, Hit};
-pub use wide::{closest_hit8, GpuBvh8, GpuWideNode, WideBvhError};
+pub use wide::{closest_hit8, GpuBvh8, WideBvhError};
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuBvhNode {
-    pub lmin: [f32; 3],
-    pub left: u32,
-    pub lmax: [f32; 3],
-    pub right: u32,
-    pub rmin: [f32; 3],
-    pub pad0: u32,
-    pub rmax: [f32; 3],
-    pub pad1: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuTriangle {
-    pub v0: [f32; 3],
-    pub material: u32,
-    pub v1: [f32; 3],
-    pub original: u32,
-    pub v2: [f32; 3],
-    pub pad: u32,
-}
-
-const _: () = assert!(std::mem::size_of::<GpuBvhNode>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuTriangle>() == 48);
+// The node and triangle types are declared once, in `cohort-layout`, and read by the
+// kernels as written here.
+const _: () = assert!(std::mem::size_of::<layout::BvhNode>() == 64);
+const _: () = assert!(std::mem::size_of::<layout::Triangle>() == 48);
 
 /// Bit 31 of a child reference: the child is a leaf.
 pub const LEAF_BIT: u32 = 1 << 31;
@@ -107,8 +86,8 @@ pub const fn decode_leaf(child: u32) -> (u32, u32) {
 /// skip traversal: there is nothing to hit).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GpuBvh {
-    pub nodes: Vec<GpuBvhNode>,
-    pub triangles: Vec<GpuTriangle>,
+    pub nodes: Vec<layout::BvhNode>,
+    pub triangles: Vec<layout::Triangle>,
     /// Most interior nodes on one root-to-leaf path: a near-first traversal stack never holds more
     /// entries than this.
     pub depth: u32,

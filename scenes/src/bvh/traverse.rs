@@ -119,8 +119,8 @@ const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32
 pub(super) fn slab(
     origin: Vec3,
     inv: Vec3,
-    lo: [f32; 3],
-    hi: [f32; 3],
+    lo: Vec3,
+    hi: Vec3,
     tmin: f32,
     tmax: f32,
 ) -> Option<f32> {
@@ -150,7 +150,7 @@ pub(super) fn leaf_closest(
     let mut best_t = tmax;
     for i in first..first + count {
         let t = &bvh.triangles[i as usize];
-        let v = [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)];
+        let v = [t.v0, t.v1, t.v2];
         if let Some((t_hit, u, w)) = shear.hit(v[0], v[1], v[2], tmin, best_t) {
             best_t = t_hit;
             best = Some(Hit {

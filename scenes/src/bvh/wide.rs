@@ -4,7 +4,7 @@
 //! and the same conservative slab test.
 //!
 //! # GPU layout
-//! [`GpuBvh8::nodes`] is an array of 128-byte records ([`GpuWideNode`]); one 8-wide node is two
+//! [`GpuBvh8::nodes`] is an array of 128-byte records ([`layout::WideNode`]); one 8-wide node is two
 //! consecutive records, slots 0..=3 in the first and 4..=7 in the second. A record is four child
 //! boxes in structure-of-arrays form (`lo_x[i]`, `hi_x[i]`, ... of child slot i), so that a thread
 //! tests four boxes with vector-shaped arithmetic and 16-byte loads:
@@ -27,7 +27,9 @@
 //! octant `oct` has bit `slot ^ oct` set for each leaf child, so a kernel separates leaf and
 //! interior hits in that order without permuting bits itself.
 
-use glam::Vec3;
+use glam::{UVec4, Vec3, Vec4};
+
+use crate::layout;
 
 use super::{is_leaf, GpuBvh};
 
@@ -38,25 +40,12 @@ pub const WIDTH: usize = 8;
 /// Stack entries a traversal kernel has (it pushes at most `interior children - 1` per node).
 pub const STACK_SIZE: u32 = 64;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuWideNode {
-    pub lo_x: [f32; 4],
-    pub hi_x: [f32; 4],
-    pub lo_y: [f32; 4],
-    pub hi_y: [f32; 4],
-    pub lo_z: [f32; 4],
-    pub hi_z: [f32; 4],
-    pub child: [u32; 4],
-    pub meta: [u32; 4],
-}
-
-const _: () = assert!(std::mem::size_of::<GpuWideNode>() == 128);
+const _: () = assert!(std::mem::size_of::<layout::WideNode>() == 128);
 
 /// The 8-wide node records; triangles are the BVH2's ([`GpuBvh::triangles`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GpuBvh8 {
-    pub nodes: Vec<GpuWideNode>,
+    pub nodes: Vec<layout::WideNode>,
     /// Most 8-wide nodes on one root-to-leaf path.
     pub depth: u32,
     /// Most stack entries an ordered traversal that pushes every hit interior child but the
@@ -133,13 +122,13 @@ impl GpuBvh8 {
         [
             Child {
                 r: n.left,
-                lo: n.lmin.into(),
-                hi: n.lmax.into(),
+                lo: n.lmin,
+                hi: n.lmax,
             },
             Child {
                 r: n.right,
-                lo: n.rmin.into(),
-                hi: n.rmax.into(),
+                lo: n.rmin,
+                hi: n.rmax,
             },
         ]
     }
@@ -162,15 +151,15 @@ impl GpuBvh8 {
         }
         let slots = assign_slots(&kids);
         let index = self.nodes.len() as u32;
-        let empty = GpuWideNode {
-            lo_x: [f32::INFINITY; 4],
-            hi_x: [f32::NEG_INFINITY; 4],
-            lo_y: [f32::INFINITY; 4],
-            hi_y: [f32::NEG_INFINITY; 4],
-            lo_z: [f32::INFINITY; 4],
-            hi_z: [f32::NEG_INFINITY; 4],
-            child: [EMPTY_SLOT; 4],
-            meta: [0; 4],
+        let empty = layout::WideNode {
+            lo_x: Vec4::INFINITY,
+            hi_x: Vec4::NEG_INFINITY,
+            lo_y: Vec4::INFINITY,
+            hi_y: Vec4::NEG_INFINITY,
+            lo_z: Vec4::INFINITY,
+            hi_z: Vec4::NEG_INFINITY,
+            child: UVec4::splat(EMPTY_SLOT),
+            meta: UVec4::ZERO,
         };
         self.nodes.push(empty);
         self.nodes.push(empty);
@@ -205,7 +194,7 @@ impl GpuBvh8 {
                 .fold(0u32, |m, s| m | 1 << (s ^ oct));
             meta[oct as usize / 4] |= m << (8 * (oct % 4));
         }
-        self.nodes[index as usize].meta = [meta[0], meta[1], 0, 0];
+        self.nodes[index as usize].meta = UVec4::new(meta[0], meta[1], 0, 0);
         (index, bound)
     }
 }
@@ -283,7 +272,7 @@ pub fn closest_hit8(
             }
             let lo = [rec.lo_x[j], rec.lo_y[j], rec.lo_z[j]];
             let hi = [rec.hi_x[j], rec.hi_y[j], rec.hi_z[j]];
-            *h = super::traverse::slab(origin, inv, lo, hi, tmin, best_t).is_some();
+            *h = super::traverse::slab(origin, inv, lo.into(), hi.into(), tmin, best_t).is_some();
         }
         let child = |s: usize| recs[s / 4].child[s % 4];
         // Leaves in octant order, then interior children in octant order.
@@ -349,7 +338,7 @@ mod tests {
                 // Every leaf of the BVH2 appears exactly once.
                 let mut seen = vec![0u32; bvh.triangles.len()];
                 for rec in &wide.nodes {
-                    for &c in &rec.child {
+                    for c in rec.child.to_array() {
                         if c != EMPTY_SLOT && is_leaf(c) {
                             let (first, count) = super::super::decode_leaf(c);
                             for i in first..first + count {
