@@ -12,7 +12,7 @@ recorded beside it.
 
 usage: equal_time.py --scenes DIR --cohort bin/cohort [--variant cuda_ad_rgb] [--size 1024]
        [--ref-spp 4096,2048] [--mitsuba-spp 32,64,128,256,512] [--cohort-paths 32,64,128,256,512,1024]
-       [--cohort-args "--integrator nee"] [--out DIR]
+       [--cohort-args "--integrator nee"] [--target-spp 256] [--out DIR]
 """
 import argparse, csv, json, math, os, shlex, subprocess, sys, tempfile, time
 
@@ -75,6 +75,7 @@ def main():
     ap.add_argument("--mitsuba-spp", default="32,64,128,256,512")
     ap.add_argument("--cohort-paths", default="32,64,128,256,512,1024")
     ap.add_argument("--cohort-args", default="--integrator nee", help="Cohort options; several configurations separated by ';'")
+    ap.add_argument("--target-spp", type=int, default=256, help="the ratio is taken at the RMS of Mitsuba's render at this many spp")
     ap.add_argument("--out", default=os.environ.get("OUT", "equal-time-out"))
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -127,12 +128,12 @@ def main():
     for r in rows:
         md.append(f"| {r['scene']} | {r['renderer']} | {r['budget']} | {r['seconds']:.3f} | {r['process_seconds']:.3f} | {100 * r['rms']:.2f} |")
     md.append("")
-    md.append("| scene | Cohort configuration | Mitsuba 256-spp RMS % | Mitsuba s | Cohort s to that RMS (render) | ratio | Cohort s (process) | ratio |")
+    md.append(f"| scene | Cohort configuration | Mitsuba {a.target_spp}-spp RMS % | Mitsuba s | Cohort s to that RMS (render) | ratio | Cohort s (process) | ratio |")
     md.append("|---|---|---:|---:|---:|---:|---:|---:|")
     for name, label in [(n, l) for n in names for l in sorted({r["renderer"] for r in rows if r["renderer"].startswith("cohort")})]:
         m = [r for r in rows if r["scene"] == name and r["renderer"].startswith("mitsuba")]
         c = [r for r in rows if r["scene"] == name and r["renderer"] == label]
-        m256 = [r for r in m if r["budget"] == "256 spp"]
+        m256 = [r for r in m if r["budget"] == f"{a.target_spp} spp"]
         if not m256:
             continue
         target, tm = m256[0]["rms"], m256[0]["seconds"]

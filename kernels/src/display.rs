@@ -12,8 +12,10 @@ use cohort::prelude::*;
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
 #[repr(C)]
 pub struct DisplayParams {
-    /// Ray slots (= pixels) of the accumulation buffer.
+    /// Pixels: the ray slots of one copy (`Frame::copies`) of the accumulation buffer.
     pub slots: u32,
+    /// Slots per pixel: copy `k` of slot `g` is slot `g + k * slots`.
+    pub copies: u32,
     /// Image width in pixels.
     pub width: u32,
     /// Only pixels with `x_begin <= x < x_end` are written: two renderers share one
@@ -37,8 +39,9 @@ pub fn srgb8(linear: f32) -> u32 {
     (s * 255.0 + 0.5) as u32
 }
 
-/// One invocation per ray slot: the mean of the slot's completed paths (`accum.w` of
-/// them; black before the first), tone-mapped and packed as `0x00RRGGBB` at the slot's
+/// One invocation per pixel (per slot of the first copy): the mean of the completed paths
+/// of the pixel's slots (`accum.w` of them, summed over its copies in copy order; black
+/// before the first), tone-mapped and packed as `0x00RRGGBB` at the slot's
 /// pixel of `out` (row-major, `width` wide): the layout X11 and most windowing systems
 /// present directly.
 #[kernel(workgroup = 256)]
@@ -57,7 +60,12 @@ pub fn display(
     if x < p.x_begin || x >= p.x_end {
         return;
     }
-    let a = accum[gi as usize];
+    let mut a = Vec4::ZERO;
+    let mut k = 0u32;
+    while k < p.copies {
+        a += accum[(gi + k * p.slots) as usize];
+        k += 1;
+    }
     let mut rgb = Vec3::ZERO;
     if a.w >= 1.0 {
         rgb = a.truncate() / a.w;

@@ -197,14 +197,21 @@ pub fn init_paths(
         return;
     }
     let pixel = slot_pixel[g];
-    let key = stream(f.seed, pixel, f.first_path, 0);
+    // Copy `k` of the pixel starts at its path `first_path + k` (`Frame::copies`).
+    let path = f.first_path + gi / (f.slots / f.copies);
+    let key = stream(f.seed, pixel, path, 0);
     let fs = film_sample(f, film_filter, pixel, key);
     let film = fs.truncate();
     let lens = lens_offset(f, key);
     let o = camera_origin(f, film, lens);
     let d = camera_dir(f, film, lens);
     idrays[g] = gi;
-    state[g] = UVec4::new(pixel, f.first_path, 0, 0);
+    // A copy with no path left in the budget (fewer paths than copies) starts done.
+    let mut done = 0u32;
+    if f.paths_per_pixel != 0 && path - f.first_path >= f.paths_per_pixel {
+        done = DONE;
+    }
+    state[g] = UVec4::new(pixel, path, 0, done);
     ray_o[g] = Vec4::new(o.x, o.y, o.z, 0.0);
     // w: the path's accumulated eta² (1 for a camera ray; see `extend`'s roulette).
     ray_d[g] = Vec4::new(d.x, d.y, d.z, 1.0);
@@ -945,7 +952,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             // asks, so the CPU backend runs it as a plain loop (1.6-2x its paths/s),
             // while extend's time on an H200 did not change (BENCHMARKS.md, session 18).
             completed[0].fetch_add(1, Ordering::Relaxed);
-            let next = path + 1;
+            // The copy's next path: the pixel's other copies trace those in between.
+            let next = path + f.copies;
             let mut done = 0u32;
             if f.paths_per_pixel != 0 && next - f.first_path >= f.paths_per_pixel {
                 done = DONE;

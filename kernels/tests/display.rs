@@ -56,6 +56,7 @@ fn check(kind: BackendKind) {
     for (scale, columns) in [(1.0f32, 0..width), (0.25, 0..3), (4.0, 3..width)] {
         let params = DisplayParams {
             slots: n as u32,
+            copies: 1,
             width,
             x_begin: columns.start,
             x_end: columns.end,

@@ -219,7 +219,8 @@ pub struct Frame {
     pub cam_forward: Vec3,
     pub height: u32,
     pub cam_right: Vec3,
-    /// Number of ray slots (= pixels).
+    /// Number of ray slots: `copies` per pixel. Slot `g` is copy `g / (slots / copies)`
+    /// of pixel `slot_pixel[g]`.
     pub slots: u32,
     pub cam_up: Vec3,
     pub seed: u32,
@@ -296,7 +297,11 @@ pub struct Frame {
     /// Mitsuba `envmap`: where the map starts in the textures array, plus one
     /// (`cohort_kernels::environment`); 0: the environment is the constant `environment`.
     pub env_map: u32,
-    pub pad0: u32,
+    /// Paths of a pixel in flight at once (the wavefront is sized to the device, not to
+    /// the image): copy `k` of a pixel traces its paths `first_path + k`, `+ copies`,
+    /// `+ 2 copies`, ... below `first_path + paths_per_pixel`, so the n-th path of a
+    /// pixel still draws from (seed, pixel, n), whatever the number of copies.
+    pub copies: u32,
     pub pad1: u32,
     pub pad2: u32,
 }

@@ -16,6 +16,7 @@ pub mod provenance;
 pub mod renderer;
 pub mod roulette;
 pub mod shard;
+pub mod wavefront;
 
 pub use cohort_kernels::shading;
 pub use gpu_scene::GpuScene;

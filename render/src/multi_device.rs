@@ -75,7 +75,8 @@ pub fn render_on_devices(
 }
 
 /// The statistics of a render on several devices: paths, rays and kernel time summed
-/// (so paths per kernel second is per device), iterations and wall time of the slowest.
+/// (so paths per kernel second is per device; slots in flight too), iterations and wall
+/// time of the slowest.
 pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
     let mut all = RenderStats::default();
     for s in per_device {
@@ -93,6 +94,7 @@ pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
         all.host.wait += s.host.wait;
         all.host.batches += s.host.batches;
         all.pixels = s.pixels;
+        all.slots += s.slots;
     }
     all
 }

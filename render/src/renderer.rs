@@ -159,6 +159,10 @@ pub struct RenderOptions {
     /// Which part of the budget's paths this run renders (`crate::shard`): shard K of N
     /// renders paths K*P/N..(K+1)*P/N of every pixel under a budget of P paths per pixel.
     pub shard: Shard,
+    /// Ray slots to keep in flight: the wavefront holds this many paths at once (rounded
+    /// up to whole copies of the image, several paths of each pixel; `crate::wavefront`).
+    /// `None`: chosen from the device, enough to fill a GPU.
+    pub wavefront: Option<u32>,
 }
 
 impl RenderOptions {
@@ -181,7 +185,7 @@ impl RenderOptions {
 
     /// The paths of every pixel this run renders: (first path index, how many; 0 for a
     /// time budget, which never stops a pixel).
-    fn path_range(&self) -> (u32, u32) {
+    pub(crate) fn path_range(&self) -> (u32, u32) {
         match self.budget {
             Budget::PathsPerPixel(p) => {
                 let r = self.shard.paths(p);
@@ -221,6 +225,7 @@ impl Default for RenderOptions {
             coherent_light: false,
             light_cells: 4,
             shard: Shard::WHOLE,
+            wavefront: None,
         }
     }
 }
@@ -290,6 +295,8 @@ pub struct RenderStats {
     pub kernel: KernelTimes,
     pub wall: Duration,
     pub pixels: u64,
+    /// Ray slots of the wavefront: paths in flight at once (`RenderOptions::wavefront`).
+    pub slots: u64,
     /// Where the host's time went: recording batches, submitting them, and waiting for
     /// the oldest one in flight (the GPU is busy then; recording while it is idle is
     /// what makes the wall time exceed the kernel time).
@@ -430,19 +437,22 @@ impl<'d> Renderer<'d> {
             camera = camera.with_size(w, h);
         }
         let (w, h) = (camera.width, camera.height);
-        let n = w as u64 * h as u64;
-        if n > (1 << 26) {
+        let pixels = w as u64 * h as u64;
+        if pixels > crate::wavefront::MAX_SLOTS {
             return Err(RenderError::Options(format!(
                 "image size {w}x{h} is larger than this renderer supports (2^26 pixels)"
             )));
         }
         validate(&opts, w, h)?;
+        let copies = crate::wavefront::copies(device, &opts, pixels);
+        let n = pixels * copies as u64;
         let (max_depth, zero_depth) = crate::roulette::depth_fields(scene);
         let (rr_depth, roulette_throughput) = opts.roulette.frame_fields(scene);
         let mut frame = Frame {
             width: w,
             height: h,
             slots: n as u32,
+            copies,
             shading_normals: gpu.has_shading_normals as u32,
             filter_radius: camera.filter.map_or(0.0, |f| f.radius),
             filter_border: camera.filter.map_or(0, |f| f.border()),
@@ -463,7 +473,7 @@ impl<'d> Renderer<'d> {
         apply_options(&mut frame, &opts);
         let allocated = Instant::now();
         let n = n as usize;
-        let slot_to_pixel = slot_order(w, h, opts.interleave);
+        let slot_to_pixel = slot_order(w, h, opts.interleave).repeat(copies as usize);
         let blocks = compact::scratch_len(n);
         let paths = Paths {
             slot_pixel: device.upload(&slot_to_pixel)?,
@@ -515,8 +525,8 @@ impl<'d> Renderer<'d> {
         self.startup
     }
 
-    /// Takes new options for the next run, keeping the scene, the image size and every
-    /// buffer: cheaper than a new renderer (no allocation, no host-side set-up beyond a
+    /// Takes new options for the next run, keeping the scene, the image size, the
+    /// wavefront (its copies of the image, `crate::wavefront`) and every buffer: cheaper than a new renderer (no allocation, no host-side set-up beyond a
     /// changed interleave), which keeps the GPU busy in sweeps (`cohort figures`). The
     /// size must stay the same; a run in progress is dropped.
     pub fn reconfigure(&mut self, opts: RenderOptions) -> Result<(), RenderError> {
@@ -531,7 +541,8 @@ impl<'d> Renderer<'d> {
         }
         validate(&opts, w, h)?;
         if opts.interleave != self.opts.interleave {
-            self.slot_to_pixel = slot_order(w, h, opts.interleave);
+            let copies = self.frame.copies as usize;
+            self.slot_to_pixel = slot_order(w, h, opts.interleave).repeat(copies);
             self.device
                 .write(&self.paths.slot_pixel, 0, &self.slot_to_pixel)?;
         }
@@ -606,8 +617,10 @@ impl<'d> Renderer<'d> {
                 out.len()
             )));
         }
+        let pixels = self.frame.slots / self.frame.copies;
         let params = DisplayParams {
-            slots: self.frame.slots,
+            slots: pixels,
+            copies: self.frame.copies,
             width: w,
             x_begin: columns.start,
             x_end: columns.end.min(w),
@@ -615,7 +628,7 @@ impl<'d> Renderer<'d> {
         };
         Ok(display::launch(
             self.device,
-            self.frame.slots,
+            pixels,
             &params,
             &self.paths.slot_pixel,
             &self.paths.accum,
@@ -674,17 +687,20 @@ impl<'d> Renderer<'d> {
             &p.radiance,
             &p.accum,
         )?;
-        // A renderer can run again: each run starts from scratch.
-        d.write(&p.counters, 0, &[0, 0])?;
+        // A renderer can run again: each run starts from scratch. Copies of a pixel beyond
+        // its paths budget start done (`init_paths`), and count as done slots.
+        let idle = crate::wavefront::idle_slots(&self.frame);
+        d.write(&p.counters, 0, &[0, idle])?;
         let stats = RenderStats {
-            pixels: n as u64,
+            pixels: (n / self.frame.copies) as u64,
+            slots: n as u64,
             wall: started.elapsed(),
             ..Default::default()
         };
         self.run = Some(Run {
             stats,
             cur: 0,
-            live: n as u64,
+            live: (n - idle) as u64,
             per_iteration: None,
         });
         Ok(())
@@ -842,7 +858,9 @@ impl<'d> Renderer<'d> {
             ));
         };
         let done = |stats: &RenderStats| match until {
-            Budget::PathsPerPixel(pp) => stats.completed_paths as f64 / (pp as f64 * n as f64),
+            Budget::PathsPerPixel(pp) => {
+                stats.completed_paths as f64 / (pp as f64 * stats.pixels as f64)
+            }
             Budget::KernelTime(t) => stats.kernel.total().as_secs_f64() / t.as_secs_f64(),
         };
         // A run resumed at a budget it has already reached renders nothing; a fresh one
@@ -970,22 +988,27 @@ impl<'d> Renderer<'d> {
         }
     }
 
-    /// The current estimate: per pixel, the mean of its completed paths.
+    /// The current estimate: per pixel, the mean of its completed paths. A pixel's slots
+    /// (`Frame::copies`) are summed in slot order, so the sum does not depend on which
+    /// slot finished first.
     pub fn image(&self) -> Result<Image, RenderError> {
         let accum = self.device.read(&self.paths.accum)?;
         let (w, h) = self.size();
-        let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
-        let mut paths = vec![0u32; (w * h) as usize];
+        let mut sums = vec![Vec4::ZERO; (w * h) as usize];
         for (slot, a) in accum.iter().enumerate() {
-            let px = self.slot_to_pixel[slot] as usize;
-            let count = a.w as u32;
-            paths[px] = count;
-            pixels[px] = if count > 0 {
-                a.truncate() / a.w
-            } else {
-                Vec3::ZERO
-            };
+            sums[self.slot_to_pixel[slot] as usize] += *a;
         }
+        let paths: Vec<u32> = sums.iter().map(|a| a.w as u32).collect();
+        let pixels = sums
+            .iter()
+            .map(|a| {
+                if a.w > 0.0 {
+                    a.truncate() / a.w
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect();
         Ok(Image {
             width: w,
             height: h,
@@ -1449,7 +1472,9 @@ mod tests {
     }
 
     /// A reconfigured renderer renders exactly what a new one with those options does,
-    /// including a changed interleave (its slot order is rewritten on the GPU).
+    /// including a changed interleave (its slot order is rewritten on the GPU, for every
+    /// copy of the image in the wavefront), where both chose the same wavefront (the
+    /// budget caps the copies, and a reconfigured renderer keeps its own).
     #[test]
     fn reconfigure_equals_a_new_renderer() {
         let Some(d) = Device::for_tests(BackendKind::Vulkan) else {
@@ -1470,7 +1495,7 @@ mod tests {
             .unwrap()
             .render(|_, _| {})
             .unwrap();
-        let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(2))).unwrap();
+        let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(3))).unwrap();
         r.render(|_, _| {}).unwrap();
         r.reconfigure(target.clone()).unwrap();
         let (again, _) = r.render(|_, _| {}).unwrap();

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Time to Mitsuba 3's error at every image size, on one GPU in one run (the size table of
+# BENCHMARKS.md): scripts/equal_time.py at 128, 256, 512 and 1024 square on cornell-box and
+# stanford-like, Mitsuba `cuda_ad_rgb` against `cohort render` with its wavefront sized to
+# the device and with `--wavefront 1` (one slot per pixel, as before). The ratio is taken at
+# Mitsuba's 1024-spp error at 128 and 256, its 256-spp error at 512 and 1024.
+# Needs: $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
+# unpacked and trimmed to cuda_ad_rgb and the scenes' plugins, as a tar.xz of a `site`
+# folder), $SCENES/{cornell-box,stanford-like}. On the device:
+#   OUT=$OUT B=gpu-pack2 SITE=gpu-mitsuba/site.tar.xz SCENES=gpu-scenes scripts/gpu-sizes-vs-mitsuba.sh
+set -uo pipefail
+OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
+B="${B:-gpu-pack2}"; SITE="${SITE:-gpu-mitsuba/site.tar.xz}"; SCENES="${SCENES:-gpu-scenes}"
+(cd "$B" && xz -dkf cohort.xz && chmod +x cohort) || exit 1
+tar -C /tmp -xJf "$SITE" || exit 1
+export PYTHONPATH=/tmp/site PYTHONUNBUFFERED=1 COHORT_VK_VALIDATION=0
+export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
+nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv | tee "$OUT/gpu.txt"
+nvidia-smi --query-gpu=timestamp,clocks.sm,utilization.gpu --format=csv -lms 1000 > "$OUT/clocks.csv" &
+SMI=$!
+for size in ${SIZES:-128 256 512 1024}; do
+  case $size in
+    128) ref=65536,32768; mspp=64,128,256,512,1024,2048; cpaths=64,128,256,512,1024,2048,4096; target=1024 ;;
+    256) ref=32768,16384; mspp=64,128,256,512,1024,2048; cpaths=64,128,256,512,1024,2048,4096; target=1024 ;;
+    *) ref=4096,2048; mspp=32,64,128,256,512; cpaths=32,64,128,256,512,1024; target=256 ;;
+  esac
+  python3 scripts/equal_time.py --scenes "$SCENES" --cohort "$B/cohort" --variant cuda_ad_rgb --size $size \
+    --ref-spp $ref --mitsuba-spp $mspp --cohort-paths $cpaths --target-spp $target \
+    --cohort-args "--integrator nee --backend vulkan;--integrator nee --backend vulkan --wavefront 1" \
+    --out "$OUT/size$size" 2>&1 | grep -vE "^\{" | tee "$OUT/size$size.log"
+done
+kill $SMI
