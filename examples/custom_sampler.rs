@@ -1,20 +1,23 @@
-//! Writing a new sampling strategy: one `impl` of `DiffuseSampler`, tested on the host
-//! (the same Rust runs there) and then rendered on the GPU, where `extend::<S>` is
-//! compiled for it.
+//! Writing a new sampling strategy: one `impl` of `DiffuseSampler`, validated by the
+//! statistical test of `cohort_render::validate` (its own kernel, run on the device, at
+//! every group level), then rendered with, `extend::<S>` compiled for it.
 //!
 //! The strategy: the group shares an azimuth stratum (one of 4N slices of the
 //! hemisphere around the normal); each ray samples cosine-weighted inside the slice.
 //! Since the slice is uniform and cosine sampling is separable in azimuth, every ray's
-//! pdf is exactly cos/pi: weight 1, unbiased, and coherent within the group.
+//! pdf over the group's draws is exactly cos/pi: weight 1, unbiased, and coherent within
+//! the group.
 //!
-//! `cargo run --release -p cohort-render --example custom_sampler`
+//! `cargo run --release -p cohort-render --example custom_sampler` (on a GPU if there is
+//! one, else on the CPU backend; it says which).
 
 use cohort::prelude::*;
 use cohort::runtime::Device;
 use cohort::Group;
-use cohort_kernels::rng::{hash, stream, uniform};
+use cohort_kernels::rng::hash;
 use cohort_kernels::sampling::{cosine_hemisphere, frame, DiffuseSampler};
-use cohort_render::{output, Algorithm, Budget, RenderOptions, Renderer};
+use cohort_render::validate::{self, Report, SamplerOptions};
+use cohort_render::{output, Algorithm, Budget, Image, RenderOptions, Renderer};
 
 pub struct SharedAzimuth;
 
@@ -32,45 +35,70 @@ impl DiffuseSampler for SharedAzimuth {
     }
 }
 
-fn main() {
-    // 1. On the host: E[cos theta] under the pdf cos/pi is 2/3, whatever the group draw.
-    let n = 200_000u32;
-    let mut sum = 0.0f64;
-    for k in 0..n {
-        let group = SharedAzimuth::group_value(stream(1, k / 32, 0, 0), 16);
-        let key = stream(2, k, 0, 0);
-        let d = SharedAzimuth::sample(
-            Vec3::Z,
-            Vec2::new(uniform(key, 0), uniform(key, 1)),
-            group,
-            16,
-        );
-        sum += d.z as f64 * d.w as f64;
-    }
-    let mean = sum / n as f64;
-    println!("host check: E[cos] = {mean:.4} (expected 0.6667)");
-    assert!((mean - 2.0 / 3.0).abs() < 0.01);
+/// How much work the example does.
+pub struct Settings {
+    /// Rays per group level of the validation.
+    pub samples: u32,
+    /// Image size and paths per pixel of the render.
+    pub size: u32,
+    pub paths: u32,
+}
 
-    // 2. On the GPU: render the default scene with it, groups of one warp.
-    let device =
-        Device::best().expect("a Vulkan device (scripts/install-deps.sh installs lavapipe)");
-    let scene = cohort_scenes::embedded::load("cornell").unwrap();
+/// Validates `SharedAzimuth` on `device` at every group level (the report), and when it
+/// passes renders the Cornell box with it in groups of one warp (the image).
+pub fn run(device: &Device, settings: &Settings) -> Result<(Report, Option<Image>), String> {
+    let opts = SamplerOptions {
+        samples: settings.samples,
+        ..Default::default()
+    };
+    let report = validate::sampler::<SharedAzimuth>(device, &opts).map_err(|e| e.to_string())?;
+    if !report.passed() {
+        return Ok((report, None));
+    }
+    let scene = cohort_scenes::embedded::load("cornell").ok_or("no embedded scene `cornell`")?;
     let opts = RenderOptions {
         algorithm: Algorithm {
             group: Group::Warp,
             coherent: true,
         },
         patches_n: 16,
-        budget: Budget::PathsPerPixel(32),
-        size: Some((128, 128)),
+        budget: Budget::PathsPerPixel(settings.paths),
+        size: Some((settings.size, settings.size)),
         ..Default::default()
     };
-    let mut renderer = Renderer::new(&device, &scene, opts).unwrap();
-    let (image, stats) = renderer.render_custom::<SharedAzimuth>(|_, _| {}).unwrap();
+    let mut renderer = Renderer::new(device, &scene, opts).map_err(|e| e.to_string())?;
+    let (image, _) = renderer
+        .render_custom::<SharedAzimuth>(|_, _| {})
+        .map_err(|e| e.to_string())?;
+    Ok((report, Some(image)))
+}
+
+#[allow(dead_code)]
+fn main() {
+    let (device, why) = Device::best_explained().expect("no device, not even the CPU backend");
+    println!("device: {}", validate::device_name(&device));
+    if let Some(why) = why {
+        println!("(the CPU backend: {why})");
+    }
+    let settings = Settings {
+        samples: 1 << 18,
+        size: 128,
+        paths: 32,
+    };
+    // 1. Validate: the weighted directions over the group's draws follow cos/pi, at every
+    //    group level (docs/VALIDATION.md).
+    let (report, image) = run(&device, &settings).unwrap_or_else(|e| panic!("{e}"));
+    println!("{report}");
+    let Some(image) = image else {
+        eprintln!("SharedAzimuth failed its validation: not rendering with it");
+        std::process::exit(1);
+    };
+    // 2. Render the default scene with it, groups of one warp.
     output::write_png(std::path::Path::new("custom_sampler.png"), &image, 0.0).unwrap();
     println!(
-        "rendered {} paths/pixel, mean radiance {}; wrote custom_sampler.png",
-        stats.paths_per_pixel(),
+        "rendered {} paths/pixel on {}, mean radiance {}; wrote custom_sampler.png",
+        settings.paths,
+        validate::device_name(&device),
         image.mean()
     );
 }

@@ -43,3 +43,4 @@ pub mod texture;
 pub mod traverse;
 pub mod traverse_cw;
 pub mod traverse_wide;
+pub mod validate;

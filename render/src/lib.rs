@@ -16,6 +16,7 @@ pub mod provenance;
 pub mod renderer;
 pub mod roulette;
 pub mod shard;
+pub mod validate;
 pub mod wavefront;
 
 pub use cohort_kernels::shading;
