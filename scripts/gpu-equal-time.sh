@@ -10,6 +10,6 @@ nvidia-smi --query-gpu=timestamp,clocks.sm,utilization.gpu,clocks_event_reasons.
 SMI=$!
 python3 scripts/equal_time.py --scenes shared-scenes --cohort bin-gpu/cohort --variant cuda_ad_rgb --size 1024 \
   --ref-spp 4096,2048 --mitsuba-spp 32,64,128,256,512,1024 --cohort-paths 32,64,128,256,512,1024 \
-  --cohort-args "--integrator nee --backend vulkan;--integrator nee --backend vulkan --no-compact;--integrator path --backend vulkan --no-compact" \
+  --cohort-args "--integrator nee --backend vulkan;--integrator nee --backend vulkan ;--integrator path --backend vulkan" \
   --out "$OUT" 2>&1 | tee "$OUT/equal_time.log"
 kill $SMI

@@ -29,8 +29,8 @@ for be in vulkan wgpu; do
 done
 # Coherent configurations against normal, same run (issue 4), one scene per run.
 for s in ${COHERENT_SCENES:-confroom}; do
-  for cfg in "normal --compact" "warp --compact" "block_256 --compact" "block_512 --compact" "block_1024 --compact" "grid --compact" "warp --rr group --no-compact" "block_256 --rr group --no-compact" "warp --in-patch equal-area --compact" "normal --no-compact" \
-      "warp --rr whole --compact" "warp --rr whole --no-compact" "block_256 --rr whole --no-compact"; do
+  for cfg in "normal --compact" "warp --compact" "block_256 --compact" "block_512 --compact" "block_1024 --compact" "grid --compact" "warp --rr group " "block_256 --rr group" "warp --in-patch equal-area --compact" "normal" \
+      "warp --rr whole --compact" "warp --rr whole " "block_256 --rr whole"; do
     echo "== coherent $s $cfg"
     $B/cohort render --scene $s --backend vulkan --width 1024 --height 1024 --time ${COHERENT_SECONDS:-1} --n 100 --algorithm $cfg \
       --out "$OUT/c.exr" --png "$OUT/c.png" 2>&1 | grep -E "^algorithm|paths/s"

@@ -11,11 +11,13 @@ use cohort_render::merge::merge_tolerance;
 
 #[derive(clap::Args)]
 pub struct CompareArgs {
+    /// The first EXR (its header's paths budget sets the default tolerance).
     a: PathBuf,
+    /// The second EXR.
     b: PathBuf,
-    /// Largest relative difference per channel allowed (default: float summation order's
-    /// for the paths budget in A's header, 0 without one).
-    #[arg(long)]
+    /// Largest relative difference per channel allowed, 0 or more (default: float
+    /// summation order's for the paths budget in A's header, 0 without one).
+    #[arg(long, value_parser = crate::choices::non_negative, allow_negative_numbers = true)]
     tolerance: Option<f32>,
 }
 

@@ -4,11 +4,12 @@
 
 use cohort::runtime::{BackendKind, Device};
 
+use crate::choices::DeviceList;
+
 /// The backend `--backend` names, or the one `Device::best` would pick.
-fn backend_kind(backend: Option<&str>) -> Result<BackendKind, String> {
+fn backend_kind(backend: Option<BackendKind>) -> Result<BackendKind, String> {
     match backend {
-        Some(b) => BackendKind::parse(b)
-            .ok_or_else(|| format!("unknown backend `{b}` (wgpu, vulkan or cpu)")),
+        Some(b) => Ok(b),
         None => Ok(Device::best().map_err(|e| e.to_string())?.info().backend),
     }
 }
@@ -23,33 +24,32 @@ pub fn best() -> Result<Device, String> {
     Ok(device)
 }
 
-/// Opens the devices of `--devices` on `--backend`; every index is checked before any
-/// work starts, so a bad one fails at once, naming the devices there are.
-pub fn open(backend: Option<&str>, devices: Option<&str>) -> Result<Vec<Device>, String> {
+/// The device of `--backend`, or the best one found.
+pub fn one(backend: Option<BackendKind>) -> Result<Device, String> {
+    match backend {
+        None => best(),
+        Some(kind) => Device::new(kind).map_err(|e| e.to_string()),
+    }
+}
+
+/// Opens the devices of `--devices` (parsed, so well formed) on `--backend`; every index
+/// is checked before any work starts, so a missing one fails at once, naming the devices
+/// there are.
+pub fn open(
+    backend: Option<BackendKind>,
+    devices: Option<&DeviceList>,
+) -> Result<Vec<Device>, String> {
     let Some(list) = devices else {
-        return Ok(vec![match backend {
-            None => best()?,
-            Some(_) => Device::new(backend_kind(backend)?).map_err(|e| e.to_string())?,
-        }]);
+        return Ok(vec![one(backend)?]);
     };
     let kind = backend_kind(backend)?;
-    if list.trim() == "all" {
-        return Device::all(kind).map_err(|e| e.to_string());
+    match list {
+        DeviceList::All => Device::all(kind).map_err(|e| e.to_string()),
+        DeviceList::Indices(indices) => indices
+            .iter()
+            .map(|&i| Device::new_index(kind, i).map_err(|e| format!("--devices: {e}")))
+            .collect(),
     }
-    let mut indices: Vec<usize> = Vec::new();
-    for item in list.split(',').map(str::trim) {
-        let i: usize = item
-            .parse()
-            .map_err(|_| format!("--devices `{list}`: `{item}` is not a device index (expected `all` or a list such as 0,1)"))?;
-        if indices.contains(&i) {
-            return Err(format!("--devices `{list}`: device {i} is listed twice"));
-        }
-        indices.push(i);
-    }
-    indices
-        .into_iter()
-        .map(|i| Device::new_index(kind, i).map_err(|e| format!("--devices `{list}`: {e}")))
-        .collect()
 }
 
 /// `cohort devices`: every usable device of each backend, by index.

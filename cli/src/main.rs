@@ -6,6 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use choices::{
+    AlgorithmChoice, Backend, DeviceList, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice,
+};
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
 use cohort_render::provenance::Provenance;
@@ -13,6 +16,8 @@ use cohort_render::{output, Budget, RenderOptions, Renderer, Shard};
 use cohort_scenes::embedded;
 use options::Config;
 
+mod check;
+mod choices;
 mod compare;
 mod devices;
 mod figures;
@@ -45,6 +50,8 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Compare two EXRs: the same image, bit for bit or within float summation order?
     Compare(compare::CompareArgs),
+    /// Statistical tests of every built-in sampling strategy and BSDF (docs/VALIDATION.md).
+    Check(check::CheckArgs),
     /// List the usable devices of each backend, by the index `--devices` takes.
     Devices,
     /// Watch a scene render progressively in a window: move the camera, switch the
@@ -52,61 +59,62 @@ enum Command {
     View(view::ViewArgs),
 }
 
+/// The paths per pixel of an embedded scene without --paths or --time.
+const EMBEDDED_PATHS: u32 = 64;
+
 #[derive(clap::Args)]
 struct RenderArgs {
     /// Embedded scene name (see `cohort scenes`) or a Mitsuba 3 XML file.
     #[arg(long, default_value = embedded::DEFAULT)]
     scene: String,
-    /// `wgpu` (WGSL), `vulkan` (SPIR-V through ash) or `cpu` (the native CPU backend);
-    /// default: a real GPU if there is one, else `cpu`.
-    #[arg(long)]
-    backend: Option<String>,
-    /// Diffuse sampling: `normal` (independent cosine sampling), or coherent sampling
-    /// shared by a group: `warp`, `block_256`, `block_512`, `block_1024`, `grid`.
-    #[arg(long, default_value = "normal")]
-    algorithm: String,
+    /// Which backend runs the kernels (default: a real GPU if there is one, else `cpu`).
+    #[arg(long, value_enum)]
+    backend: Option<Backend>,
+    /// Diffuse sampling: `normal` (independent cosine sampling), or coherent sampling shared
+    /// by a group of paths; besides the listed groups, `block_N` with N a multiple of 32 up
+    /// to 1024.
+    #[arg(long, default_value = "normal", value_parser = choices::AlgorithmParser)]
+    algorithm: AlgorithmChoice,
     /// N: the hemisphere is split into N x 4N patches for coherent sampling (1..=1000).
-    #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 64, value_parser = choices::patches_n(), allow_negative_numbers = true)]
     n: u32,
-    /// How a ray samples inside its group's patch: `uniform` (the paper), `cosine`
-    /// (cosine-weighted inside the patch) or `equal-area` (equal-area patches through the
-    /// Shirley–Chiu concentric map).
-    #[arg(long, default_value = "uniform")]
-    in_patch: String,
-    /// Russian roulette per `path`, one draw per `group` (the paper's `_rr`), or `whole`:
-    /// group roulette plus whole-group termination (when any path of a group ends, the
-    /// others play one shared roulette with continuation --end-continue; warp and block
-    /// groups only).
-    #[arg(long, default_value = "path")]
-    rr: String,
-    /// Which roulette decides when a path ends: `fixed` (the paper's constant continuation
-    /// 0.8 from the first bounce), `mitsuba` (Mitsuba's `path`: from the scene's rr_depth, by
-    /// throughput), or `auto`: mitsuba for Mitsuba XML scenes rendered with --rr path, fixed
-    /// otherwise (embedded scenes, the paper's group roulettes).
-    #[arg(long, default_value = "auto")]
-    roulette: String,
+    /// How a ray samples inside its group's patch (coherent algorithms).
+    #[arg(long, value_enum, default_value_t = InPatchChoice::Uniform)]
+    in_patch: InPatchChoice,
+    /// Who draws the Russian roulette that ends paths: each path (`path`: per-path
+    /// roulette, whatever --integrator is), each group or the whole group. --roulette
+    /// chooses the continuation probability.
+    #[arg(long, value_enum, default_value_t = RrChoice::Path)]
+    rr: RrChoice,
+    /// The continuation probability of the Russian roulette that --rr draws.
+    #[arg(long, value_enum, default_value_t = RouletteChoice::Auto)]
+    roulette: RouletteChoice,
     /// Continuation probability of the whole-group-end roulette (`--rr whole`), in (0, 1].
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.5, value_parser = choices::probability, allow_negative_numbers = true)]
     end_continue: f32,
-    /// Interleaved sampling factor D (odd): pixel coordinates are multiplied by D.
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    /// Interleaved sampling factor D (odd, and coprime with the image size): pixel
+    /// coordinates are multiplied by D; 1 for none.
+    #[arg(long, default_value_t = 1, value_parser = choices::odd, allow_negative_numbers = true)]
     interleave: u32,
     /// Glossy (GGX) bounces also sample coherently, sharing a cell of the VNDF domain.
     #[arg(long)]
     coherent_glossy: bool,
-    /// Image width (default: the scene's film).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Image width, at least 1 (default: the scene's film).
+    #[arg(long, value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     width: Option<u32>,
-    /// Image height (default: the scene's film).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Image height, at least 1 (default: the scene's film).
+    #[arg(long, value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     height: Option<u32>,
-    /// Completed paths per pixel (default: the sample_count of a Mitsuba scene's sampler, or
-    /// 64).
-    #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
+    /// Completed paths per pixel, at least 1 (default: the sample_count of a Mitsuba
+    /// scene's sampler, or 64).
+    #[arg(long, conflicts_with = "time", value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     paths: Option<u32>,
-    /// Budget of accumulated GPU kernel time (traverse + extend + compact), in seconds.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Budget of accumulated GPU kernel time (traverse + extend + compact), in seconds
+    /// (positive, at most 1e6).
+    #[arg(long, value_parser = choices::seconds, allow_negative_numbers = true)]
     time: Option<f64>,
+    /// Seed of the random numbers (0..=4294967295): the same seed, options and budget
+    /// give the same image.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     seed: u32,
     /// Linear EXR output.
@@ -115,37 +123,45 @@ struct RenderArgs {
     /// Tone-mapped sRGB PNG output.
     #[arg(long, default_value = "render.png")]
     png: PathBuf,
-    /// Exposure of the PNG, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure of the PNG, in stops (negative: darker).
+    #[arg(long, default_value_t = 0.0, value_parser = choices::finite, allow_negative_numbers = true)]
     exposure: f32,
     /// Statistics as JSON.
     #[arg(long)]
     stats: Option<PathBuf>,
     /// Run stream compaction between iterations (the paper's renderer; its `(NO)`
-    /// variants turn it off). Off by default: with light sampling, the path state stays
+    /// variants are without). Off by default: with light sampling, the path state stays
     /// coalesced without it and renders reach a given error about twice as fast on an H100
     /// (BENCHMARKS.md, equal-time table).
-    #[arg(long, conflicts_with = "no_compact")]
-    compact: bool,
-    /// No stream compaction (the default; kept for scripts written for earlier versions).
     #[arg(long)]
-    no_compact: bool,
+    compact: bool,
     /// Sort the rays by direction octant and origin cell before the traversal, every K
     /// iterations (0: never, the default). The image is the same; it changes only the
     /// order in which the traversal takes the rays (BENCHMARKS.md: it does not pay).
-    #[arg(long, value_name = "K", default_value_t = 0)]
+    #[arg(
+        long,
+        value_name = "K",
+        default_value_t = 0,
+        allow_negative_numbers = true
+    )]
     reorder: u32,
-    /// `nee`: next-event estimation (an emitter sample at every non-delta vertex, combined
-    /// with BSDF sampling by MIS, as Mitsuba's `path` integrator does; the meaning of a
-    /// scene's `<integrator type="path">`), or `path`: implicit path tracing (the paper's).
-    #[arg(long, default_value = "nee")]
-    integrator: String,
+    /// Ray slots in flight: paths traced at once. Rounded up to whole copies of the image
+    /// (several paths of each pixel at once), at most one copy per path of the budget.
+    /// Default: chosen from the device (about a million on a GPU, 16384 on the CPU
+    /// backend and software drivers). The image does not depend on it beyond the order
+    /// of float sums.
+    #[arg(long, value_name = "SLOTS", value_parser = clap::value_parser!(u32).range(1..))]
+    wavefront: Option<u32>,
+    /// The light transport estimator. The default here is `nee`; `cohort figures`
+    /// defaults to `path`, the paper's.
+    #[arg(long, value_enum, default_value_t = IntegratorChoice::Nee)]
+    integrator: IntegratorChoice,
     /// Coherent light sampling (with `--integrator nee`): a group shares its light pick
     /// and one of K x K strata of the light.
     #[arg(long)]
     coherent_light: bool,
     /// K of the K x K light strata of `--coherent-light` (1..=64).
-    #[arg(long, default_value_t = 4, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 4, value_parser = choices::light_cells(), allow_negative_numbers = true)]
     light_cells: u32,
     /// Mitsuba scenes: render even with plugins, elements or parameters that Mitsuba rejects or
     /// the renderer does not implement; each becomes a warning and the object is skipped or
@@ -158,12 +174,12 @@ struct RenderArgs {
     define: Vec<(String, String)>,
     /// Render only shard K of N of the budget (0 <= K < N): with --paths P, paths
     /// K*P/N..(K+1)*P/N of every pixel. `cohort merge` combines the shards' EXRs.
-    #[arg(long, value_name = "K/N")]
-    shard: Option<String>,
+    #[arg(long, value_name = "K/N", value_parser = Shard::parse)]
+    shard: Option<Shard>,
     /// Render on several devices at once, one thread each, splitting the paths between
     /// them: `all`, or device indices such as `0,1` (`cohort devices` lists them).
-    #[arg(long)]
-    devices: Option<String>,
+    #[arg(long, value_parser = choices::device_list)]
+    devices: Option<DeviceList>,
 }
 
 /// `NAME=VALUE` of `-D`.
@@ -188,6 +204,7 @@ fn main() -> ExitCode {
         Command::FiguresMerge(a) => figures::merge::run(a),
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Check(a) => check::run(a),
         Command::Devices => devices::list(),
         Command::View(a) => view::run(a),
     };
@@ -229,34 +246,58 @@ impl RenderArgs {
     /// The configuration options, by name (shared with `cohort view`).
     fn config(&self) -> Config {
         Config {
-            algorithm: self.algorithm.clone(),
+            algorithm: self.algorithm,
             n: self.n,
-            in_patch: self.in_patch.clone(),
-            rr: self.rr.clone(),
-            roulette: self.roulette.clone(),
+            in_patch: self.in_patch,
+            rr: self.rr,
+            roulette: self.roulette,
             end_continue: self.end_continue,
             interleave: self.interleave,
             coherent_glossy: self.coherent_glossy,
             compact: self.compact,
             reorder: self.reorder,
-            integrator: self.integrator.clone(),
+            integrator: self.integrator,
             coherent_light: self.coherent_light,
             light_cells: self.light_cells,
             seed: self.seed,
+            wavefront: self.wavefront,
         }
     }
 
-    /// The budget the options ask for (`None`: the scene's default).
-    fn budget(&self) -> Result<Option<Budget>, String> {
-        Ok(match (self.paths, self.time) {
-            (_, Some(t)) if !(t > 0.0 && t.is_finite()) => {
-                return Err(format!("--time {t} must be a positive number of seconds"))
-            }
+    /// The budget the options ask for (`None`: the scene's default). The parser has
+    /// checked both numbers.
+    fn budget(&self) -> Option<Budget> {
+        match (self.paths, self.time) {
             (_, Some(t)) => Some(Budget::KernelTime(Duration::from_secs_f64(t))),
-            (Some(0), _) => return Err("--paths must be at least 1".into()),
             (Some(p), None) => Some(Budget::PathsPerPixel(p)),
             (None, None) => None,
-        })
+        }
+    }
+
+    /// The budget known before the scene is read: the options', or an embedded scene's
+    /// default.
+    fn known_budget(&self) -> Option<Budget> {
+        self.budget().or(self
+            .is_embedded_scene()
+            .then_some(Budget::PathsPerPixel(EMBEDDED_PATHS)))
+    }
+
+    /// Checks `options` as far as they can be without the scene, so that a combination the
+    /// renderer refuses (`--rr whole` with `grid`, `--coherent-light` with `--integrator
+    /// path`, a shard without paths, an interleave factor that does not permute the given
+    /// width or height) fails before any scene is read or device opened. Sides of the
+    /// image taken from the scene's film are checked once it is read.
+    fn check_before_scene(&self, options: &RenderOptions) -> Result<(), String> {
+        let options = RenderOptions {
+            // Unknown until the scene is read: a time budget, which every shard has.
+            budget: self
+                .known_budget()
+                .unwrap_or(Budget::KernelTime(Duration::ZERO)),
+            ..options.clone()
+        };
+        options
+            .check(self.width.unwrap_or(1), self.height.unwrap_or(1))
+            .map_err(|e| e.to_string())
     }
 
     fn is_embedded_scene(&self) -> bool {
@@ -289,16 +330,14 @@ impl RenderArgs {
 fn render(a: RenderArgs) -> Result<(), String> {
     let process_start = std::time::Instant::now();
     let config = a.config();
-    let configured = config.options(a.is_embedded_scene())?;
-    let RenderOptions {
-        algorithm,
-        group_rr,
-        whole_group_end,
-        integrator,
-        ..
-    } = configured;
-    let budget = a.budget()?;
-    // Where the outputs go is checked before anything is loaded or rendered.
+    let shard = a.shard.unwrap_or(Shard::WHOLE);
+    let configured = RenderOptions {
+        shard,
+        ..config.options(a.is_embedded_scene())
+    };
+    // Every option is checked before anything is loaded or rendered, and so is where the
+    // outputs go.
+    a.check_before_scene(&configured)?;
     for path in [Some(&a.out), Some(&a.png), a.stats.as_ref()]
         .into_iter()
         .flatten()
@@ -308,29 +347,31 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let scene = a.load_scene()?;
     let scene_loaded = process_start.elapsed();
     // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
-    let budget = budget.unwrap_or(Budget::PathsPerPixel(if a.is_embedded_scene() {
-        64
-    } else {
-        scene.sample_count.max(1)
-    }));
+    let budget = a
+        .known_budget()
+        .unwrap_or(Budget::PathsPerPixel(scene.sample_count.max(1)));
     let size = a.size(&scene);
-    let shard = match &a.shard {
-        Some(s) => Shard::parse(s).map_err(|e| format!("--shard: {e}"))?,
-        None => Shard::WHOLE,
-    };
-    let devices = devices::open(a.backend.as_deref(), a.devices.as_deref())?;
-    let device_opened = process_start.elapsed();
-    let info = devices[0].info().clone();
+    let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
     let opts = RenderOptions {
         budget,
         size,
-        shard,
         ..configured
     };
+    // With the scene's size and budget, before the device is opened.
+    opts.check(w, h).map_err(|e| e.to_string())?;
+    let RenderOptions {
+        algorithm,
+        group_rr,
+        whole_group_end,
+        integrator,
+        ..
+    } = opts;
+    let devices = devices::open(a.backend.map(Backend::kind), a.devices.as_ref())?;
+    let device_opened = process_start.elapsed();
+    let info = devices[0].info().clone();
     for w in cohort_render::roulette::warnings(&scene, &opts) {
         eprintln!("warning: {w}");
     }
-    let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
     let device_names: Vec<String> = devices
         .iter()
         .map(|d| d.info().adapter_name.clone())
@@ -447,10 +488,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
     }
     println!("algorithm      {}", config.label());
     println!(
-        "paths/pixel    {:.2} ({} paths, {} iterations)",
+        "paths/pixel    {:.2} ({} paths, {} iterations, {} slots in flight)",
         stats.paths_per_pixel(),
         stats.completed_paths,
-        stats.iterations
+        stats.iterations,
+        stats.slots
     );
     println!(
         "kernel time    {:.1} ms: reorder {:.1}, traverse {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
@@ -511,11 +553,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
-            "patches_n": a.n, "in_patch": a.in_patch, "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
+            "patches_n": a.n, "in_patch": choices::name(&a.in_patch), "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
             "compaction": a.compact, "reorder": a.reorder, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "shard": shard.to_string(), "devices": device_names,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
-            "iterations": stats.iterations, "rays": stats.rays,
+            "iterations": stats.iterations, "rays": stats.rays, "slots": stats.slots,
             "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "reorder": ms(k.reorder), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(),

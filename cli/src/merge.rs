@@ -23,8 +23,8 @@ pub struct MergeArgs {
     /// Tone-mapped sRGB PNG of the merged image.
     #[arg(long)]
     png: Option<PathBuf>,
-    /// Exposure of the PNG, in stops.
-    #[arg(long, default_value_t = 0.0)]
+    /// Exposure of the PNG, in stops (negative: darker).
+    #[arg(long, default_value_t = 0.0, value_parser = crate::choices::finite, allow_negative_numbers = true)]
     exposure: f32,
     /// Fail, rather than warn, when shards of the split are missing (for pipelines).
     #[arg(long)]

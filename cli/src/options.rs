@@ -3,26 +3,33 @@
 //! changes it live, by the same names (`set algorithm grid` in a script, a key in the
 //! window), and `--compare` gives a second one as `name=value` overrides.
 
-use cohort_render::{Algorithm, InPatch, IntegratorKind, RenderOptions, Roulette};
+use cohort_render::{RenderOptions, Roulette};
+
+use crate::choices::{
+    self, AlgorithmChoice, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice,
+};
 
 /// The options that select the estimator and the paper's configuration, as the user
-/// wrote them.
+/// chose them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
-    pub algorithm: String,
+    pub algorithm: AlgorithmChoice,
     pub n: u32,
-    pub in_patch: String,
-    pub rr: String,
-    pub roulette: String,
+    pub in_patch: InPatchChoice,
+    pub rr: RrChoice,
+    pub roulette: RouletteChoice,
     pub end_continue: f32,
     pub interleave: u32,
     pub coherent_glossy: bool,
     pub compact: bool,
     pub reorder: u32,
-    pub integrator: String,
+    pub integrator: IntegratorChoice,
     pub coherent_light: bool,
     pub light_cells: u32,
     pub seed: u32,
+    /// Ray slots in flight (`RenderOptions::wavefront`); fixed for a renderer's life, so
+    /// not one of the names `set` changes.
+    pub wavefront: Option<u32>,
 }
 
 /// Every name `Config::set` takes, for error messages and the viewer's help.
@@ -43,16 +50,6 @@ pub const NAMES: &[&str] = &[
     "seed",
 ];
 
-/// The algorithms in the order the viewer cycles through them (keys 1-6).
-pub const ALGORITHMS: &[&str] = &[
-    "normal",
-    "warp",
-    "block_256",
-    "block_512",
-    "block_1024",
-    "grid",
-];
-
 fn parse_bool(v: &str) -> Result<bool, String> {
     match v {
         "true" | "on" | "yes" | "1" => Ok(true),
@@ -61,44 +58,30 @@ fn parse_bool(v: &str) -> Result<bool, String> {
     }
 }
 
-fn parse_num<T: std::str::FromStr>(v: &str) -> Result<T, String> {
-    v.parse().map_err(|_| format!("`{v}` is not a number"))
-}
-
 impl Config {
-    /// Sets the option `name` (as on the command line, without `--`) to `value`; the
-    /// value is checked when the options are built ([`Config::options`]).
+    /// Sets the option `name` (as on the command line, without `--`) to `value`, parsed
+    /// and range-checked as the command line does ([`choices`]).
     pub fn set(&mut self, name: &str, value: &str) -> Result<(), String> {
+        use choices::{parse, parse_number};
         let r: Result<(), String> = match name {
-            "algorithm" => {
-                self.algorithm = value.to_string();
-                Ok(())
+            "algorithm" => parse(value).map(|v| self.algorithm = v),
+            "n" => parse_number(choices::patches_n(), value).map(|v| self.n = v),
+            "in-patch" => parse(value).map(|v| self.in_patch = v),
+            "rr" => parse(value).map(|v| self.rr = v),
+            "roulette" => parse(value).map(|v| self.roulette = v),
+            "end-continue" => {
+                parse_number(choices::probability, value).map(|v| self.end_continue = v)
             }
-            "n" => parse_num(value).map(|v| self.n = v),
-            "in-patch" => {
-                self.in_patch = value.to_string();
-                Ok(())
-            }
-            "rr" => {
-                self.rr = value.to_string();
-                Ok(())
-            }
-            "roulette" => {
-                self.roulette = value.to_string();
-                Ok(())
-            }
-            "end-continue" => parse_num(value).map(|v| self.end_continue = v),
-            "interleave" => parse_num(value).map(|v| self.interleave = v),
+            "interleave" => parse_number(choices::odd, value).map(|v| self.interleave = v),
             "coherent-glossy" => parse_bool(value).map(|v| self.coherent_glossy = v),
             "compact" => parse_bool(value).map(|v| self.compact = v),
-            "reorder" => parse_num(value).map(|v| self.reorder = v),
-            "integrator" => {
-                self.integrator = value.to_string();
-                Ok(())
-            }
+            "reorder" => parse_number(clap::value_parser!(u32), value).map(|v| self.reorder = v),
+            "integrator" => parse(value).map(|v| self.integrator = v),
             "coherent-light" => parse_bool(value).map(|v| self.coherent_light = v),
-            "light-cells" => parse_num(value).map(|v| self.light_cells = v),
-            "seed" => parse_num(value).map(|v| self.seed = v),
+            "light-cells" => {
+                parse_number(choices::light_cells(), value).map(|v| self.light_cells = v)
+            }
+            "seed" => parse_number(clap::value_parser!(u32), value).map(|v| self.seed = v),
             _ => {
                 return Err(format!(
                     "unknown option `{name}` (one of: {})",
@@ -107,6 +90,29 @@ impl Config {
             }
         };
         r.map_err(|e| format!("{name}: {e}"))
+    }
+
+    /// The value of the option `name`, as `set` takes it (`None`: no such option).
+    pub fn get(&self, name: &str) -> Option<String> {
+        use choices::name as n;
+        let on_off = |b: bool| if b { "on" } else { "off" }.to_string();
+        Some(match name {
+            "algorithm" => self.algorithm.name(),
+            "n" => self.n.to_string(),
+            "in-patch" => n(&self.in_patch),
+            "rr" => n(&self.rr),
+            "roulette" => n(&self.roulette),
+            "end-continue" => self.end_continue.to_string(),
+            "interleave" => self.interleave.to_string(),
+            "coherent-glossy" => on_off(self.coherent_glossy),
+            "compact" => on_off(self.compact),
+            "reorder" => self.reorder.to_string(),
+            "integrator" => n(&self.integrator),
+            "coherent-light" => on_off(self.coherent_light),
+            "light-cells" => self.light_cells.to_string(),
+            "seed" => self.seed.to_string(),
+            _ => return None,
+        })
     }
 
     /// Applies `name=value` overrides separated by commas (`--compare`).
@@ -126,42 +132,21 @@ impl Config {
     }
 
     /// The renderer's options for a scene (`embedded`: one of the embedded scenes, which
-    /// decides the `auto` roulette), checking every name.
-    pub fn options(&self, embedded: bool) -> Result<RenderOptions, String> {
-        let algorithm = Algorithm::parse(&self.algorithm).ok_or_else(|| {
-            format!(
-                "unknown algorithm `{}` (available: {})",
-                self.algorithm,
-                ALGORITHMS.join(", ")
-            )
-        })?;
-        let in_patch = match self.in_patch.as_str() {
-            "uniform" => InPatch::Uniform,
-            "cosine" => InPatch::Cosine,
-            "equal-area" => InPatch::EqualArea,
-            other => {
-                return Err(format!(
-                    "unknown --in-patch `{other}` (uniform, cosine or equal-area)"
-                ))
-            }
+    /// decides the `auto` roulette). Combinations are checked by `RenderOptions::check`.
+    pub fn options(&self, embedded: bool) -> RenderOptions {
+        let (group_rr, whole_group_end) = match self.rr {
+            RrChoice::Path => (false, None),
+            RrChoice::Group => (true, None),
+            RrChoice::Whole => (true, Some(self.end_continue)),
         };
-        let (group_rr, whole_group_end) = match self.rr.as_str() {
-            "path" => (false, None),
-            "group" => (true, None),
-            "whole" => (true, Some(self.end_continue)),
-            other => return Err(format!("unknown --rr `{other}` (path, group or whole)")),
+        let roulette = match self.roulette {
+            RouletteChoice::Auto if self.rr == RrChoice::Path && !embedded => Roulette::Mitsuba,
+            RouletteChoice::Auto | RouletteChoice::Fixed => Roulette::Fixed,
+            RouletteChoice::Mitsuba => Roulette::Mitsuba,
         };
-        let roulette = match self.roulette.as_str() {
-            "auto" if self.rr == "path" && !embedded => Roulette::Mitsuba,
-            "auto" => Roulette::Fixed,
-            other => Roulette::parse(other)
-                .ok_or_else(|| format!("unknown --roulette `{other}` (auto, fixed or mitsuba)"))?,
-        };
-        let integrator = IntegratorKind::parse(&self.integrator)
-            .ok_or_else(|| format!("unknown --integrator `{}` (nee or path)", self.integrator))?;
-        Ok(RenderOptions {
-            algorithm,
-            in_patch,
+        RenderOptions {
+            algorithm: self.algorithm.0,
+            in_patch: self.in_patch.to_render(),
             patches_n: self.n,
             group_rr,
             interleave: self.interleave,
@@ -170,12 +155,13 @@ impl Config {
             compact: self.compact,
             reorder: self.reorder,
             whole_group_end,
-            integrator,
+            integrator: self.integrator.to_render(),
             roulette,
             coherent_light: self.coherent_light,
             light_cells: self.light_cells,
+            wavefront: self.wavefront,
             ..Default::default()
-        })
+        }
     }
 
     /// One line naming the configuration as the paper does (`block_256_rr (NO), N = 64,
@@ -183,17 +169,17 @@ impl Config {
     pub fn label(&self) -> String {
         format!(
             "{}{}{}, N = {}, in-patch {}, D = {}, integrator {}{}",
-            self.algorithm,
-            match self.rr.as_str() {
-                "whole" => format!("_rr, whole-group end (q = {})", self.end_continue),
-                "group" => "_rr".into(),
-                _ => String::new(),
+            self.algorithm.name(),
+            match self.rr {
+                RrChoice::Whole => format!("_rr, whole-group end (q = {})", self.end_continue),
+                RrChoice::Group => "_rr".into(),
+                RrChoice::Path => String::new(),
             },
             if self.compact { "" } else { " (NO)" },
             self.n,
-            self.in_patch,
+            choices::name(&self.in_patch),
             self.interleave,
-            self.integrator,
+            choices::name(&self.integrator),
             if self.coherent_light {
                 format!(", coherent light (K = {})", self.light_cells)
             } else {
@@ -209,20 +195,21 @@ mod tests {
 
     fn base() -> Config {
         Config {
-            algorithm: "normal".into(),
+            algorithm: choices::parse("normal").unwrap(),
             n: 64,
-            in_patch: "uniform".into(),
-            rr: "path".into(),
-            roulette: "auto".into(),
+            in_patch: InPatchChoice::Uniform,
+            rr: RrChoice::Path,
+            roulette: RouletteChoice::Auto,
             end_continue: 0.5,
             interleave: 1,
             coherent_glossy: false,
             compact: false,
             reorder: 0,
-            integrator: "nee".into(),
+            integrator: IntegratorChoice::Nee,
             coherent_light: false,
             light_cells: 4,
             seed: 1,
+            wavefront: None,
         }
     }
 
@@ -231,30 +218,37 @@ mod tests {
         let c = base()
             .with_overrides("algorithm=block_256, interleave=5,compact=on")
             .unwrap();
-        assert_eq!(c.algorithm, "block_256");
+        assert_eq!(c.algorithm.name(), "block_256");
         assert_eq!(c.interleave, 5);
         assert!(c.compact);
-        let o = c.options(true).unwrap();
+        let o = c.options(true);
         assert!(o.algorithm.coherent);
         assert_eq!(o.interleave, 5);
-        assert!(base()
-            .with_overrides("colour=red")
-            .unwrap_err()
-            .contains("unknown option"));
-        assert!(base()
-            .with_overrides("n=many")
-            .unwrap_err()
-            .contains("not a number"));
-        assert!(base().with_overrides("algorithm").is_err());
-        let bad = base().with_overrides("algorithm=block_3").unwrap();
-        assert!(bad.options(true).unwrap_err().contains("unknown algorithm"));
+        let refused = |overrides: &str, needle: &str| {
+            let e = base().with_overrides(overrides).unwrap_err();
+            assert!(e.contains(needle), "{overrides}: {e}");
+        };
+        refused("colour=red", "unknown option");
+        refused("n=many", "n: `many`");
+        refused("algorithm", "expected NAME=VALUE");
+        refused("algorithm=block_3", "normal, warp, block_256");
+        // The same ranges as the command line's.
+        refused("n=0", "1..=1000");
+        refused("interleave=4", "odd");
+        refused("end-continue=0", "(0, 1]");
+        refused("light-cells=65", "1..=64");
+        let c = base()
+            .with_overrides("rr=WHOLE,in-patch=equal-area")
+            .unwrap();
+        assert_eq!(c.get("rr").unwrap(), "whole");
+        assert_eq!(c.get("in-patch").unwrap(), "equal-area");
     }
 
     #[test]
     fn auto_roulette_is_mitsubas_for_xml_scenes_with_per_path_roulette() {
-        assert_eq!(base().options(false).unwrap().roulette, Roulette::Mitsuba);
-        assert_eq!(base().options(true).unwrap().roulette, Roulette::Fixed);
+        assert_eq!(base().options(false).roulette, Roulette::Mitsuba);
+        assert_eq!(base().options(true).roulette, Roulette::Fixed);
         let group = base().with_overrides("rr=group").unwrap();
-        assert_eq!(group.options(false).unwrap().roulette, Roulette::Fixed);
+        assert_eq!(group.options(false).roulette, Roulette::Fixed);
     }
 }

@@ -386,6 +386,7 @@ fn negative_numbers_are_value_errors() {
         );
         assert!(!err.contains("unexpected argument"), "{err}");
     }
+    // Numbers with a range are checked by the parser too: a usage error naming the option.
     for args in [
         vec!["render", "--time", "-1"],
         vec![
@@ -397,15 +398,24 @@ fn negative_numbers_are_value_errors() {
             "--algorithm",
             "warp",
         ],
+        vec!["render", "--reorder", "-1"],
         vec!["figures", "--time", "-1"],
+        vec!["compare", "a.exr", "b.exr", "--tolerance", "-1"],
     ] {
         let out = cohort().args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        // The option given a negative value is named.
+        let flag = args
+            .windows(2)
+            .find(|w| w[1].starts_with("-0") || w[1] == "-1")
+            .map(|w| w[0])
+            .unwrap();
         assert!(
-            err.contains("error:") && !err.contains("unexpected argument"),
+            err.contains("invalid value '-") && err.contains(flag),
             "{args:?}: {err}"
         );
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
     }
     // --exposure -1 is a valid value: the run gets as far as the next error.
     let out = cohort()
@@ -413,7 +423,10 @@ fn negative_numbers_are_value_errors() {
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--paths must be at least 1"), "{err}");
+    assert!(
+        err.contains("invalid value '0' for '--paths <PATHS>'"),
+        "{err}"
+    );
     let out = cohort().args(["render", "-D", "novalue"]).output().unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("expected NAME=VALUE"));
 }
@@ -569,4 +582,52 @@ fn xml_scene_renders_its_sample_count() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
     assert_eq!(json["paths_per_pixel"], 3.0);
+}
+
+/// `--wavefront` sets the slots in flight (whole copies of the image, at most one per path
+/// of the budget), and `--stats` and the summary report them.
+#[test]
+fn the_wavefront_is_chosen_and_reported() {
+    let dir = tempdir();
+    for (wavefront, slots) in [
+        ("1", 24 * 16),
+        ("1000", 3 * 24 * 16),
+        ("100000", 4 * 24 * 16),
+    ] {
+        let stats = dir.join(format!("w{wavefront}.json"));
+        let out = cohort()
+            .args([
+                "render",
+                "--backend",
+                "cpu",
+                "--width",
+                "24",
+                "--height",
+                "16",
+            ])
+            .args(["--paths", "4", "--wavefront", wavefront, "--out"])
+            .arg(dir.join("w.exr"))
+            .arg("--png")
+            .arg(dir.join("w.png"))
+            .arg("--stats")
+            .arg(&stats)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(&format!("{slots} slots in flight")), "{text}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(json["slots"], slots, "--wavefront {wavefront}");
+        assert_eq!(json["paths_per_pixel"], 4.0);
+    }
+    let out = cohort()
+        .args(["render", "--backend", "cpu", "--wavefront", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "--wavefront 0 is a usage error");
 }

@@ -70,10 +70,11 @@ fn unknown_roulette_is_refused() {
         .args(["render", "--roulette", "sometimes", "--scene", "cornell"])
         .output()
         .unwrap();
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("unknown --roulette `sometimes` (auto, fixed or mitsuba)"),
+        err.contains("invalid value 'sometimes' for '--roulette <ROULETTE>'")
+            && err.contains("[possible values: auto, fixed, mitsuba]"),
         "{err}"
     );
 }

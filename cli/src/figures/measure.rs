@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use cohort::runtime::{BackendKind, Device};
+use cohort::runtime::Device;
 use cohort_render::{
     Algorithm, Budget, GpuScene, Image, InPatch, RenderOptions, RenderStats, Renderer,
 };
@@ -13,18 +13,6 @@ use cohort_render::{
 use super::csv::Row;
 use super::plan::{Group, Plan, SceneSpec};
 use super::reference::{reference_image, rms_percent};
-
-/// The device of `--backend`, or the best one found.
-pub fn open_device(backend: Option<&str>) -> Result<Device, String> {
-    match backend {
-        None => crate::devices::best(),
-        Some(b) => Device::new(
-            BackendKind::parse(b)
-                .ok_or_else(|| format!("unknown backend `{b}` (wgpu, vulkan or cpu)"))?,
-        )
-        .map_err(|e| e.to_string()),
-    }
-}
 
 /// A run of the sweep on one device, with its progress bar: `total` points (references
 /// included), of which `done` are measured.

@@ -18,6 +18,10 @@ use std::path::PathBuf;
 
 use cohort_render::{output, Image, Shard};
 
+use crate::choices::{
+    self, AlgorithmChoice, AlgorithmParser, Backend, ColumnChoice, IntegratorChoice,
+};
+
 mod csv;
 mod measure;
 pub mod merge;
@@ -36,29 +40,30 @@ pub struct FiguresArgs {
     /// Comma-separated scenes: embedded names (see `cohort scenes`) or Mitsuba 3 XML files.
     #[arg(long, default_value = DEFAULT_SCENES)]
     scenes: String,
-    /// Comma-separated configurations. `normal` (the baseline, independent of N) is
-    /// always run, listed or not.
-    #[arg(long, default_value = DEFAULT_CONFIGS)]
-    configs: String,
+    /// Comma-separated configurations, as `cohort render --algorithm` names them
+    /// (`block_N` too, N a multiple of 32 up to 1024). `normal` (the baseline, independent
+    /// of N) is always run, listed or not.
+    #[arg(long, default_value = DEFAULT_CONFIGS, value_delimiter = ',', value_parser = AlgorithmParser)]
+    configs: Vec<AlgorithmChoice>,
     /// Comma-separated values of N (hemisphere split into N x 4N patches), each in 1..=1000.
-    #[arg(long, default_value = DEFAULT_NS)]
-    n: String,
-    /// Budget of every point: accumulated GPU kernel time (traverse + extend + compact), seconds.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(long, default_value = DEFAULT_NS, value_delimiter = ',', value_parser = choices::patches_n(), allow_negative_numbers = true)]
+    n: Vec<u32>,
+    /// Budget of every point: accumulated GPU kernel time (traverse + extend + compact),
+    /// seconds (positive, at most 1e6).
+    #[arg(long, default_value_t = 1.0, value_parser = choices::seconds, allow_negative_numbers = true)]
     time: f64,
     /// Kernel-time budget of the `normal` reference images, seconds (default: 20 x --time).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = choices::seconds, allow_negative_numbers = true)]
     reference_time: Option<f64>,
-    /// Image width (default: the scene's film).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Image width, at least 1 (default: the scene's film).
+    #[arg(long, value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     width: Option<u32>,
-    /// Image height (default: the scene's film).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Image height, at least 1 (default: the scene's film).
+    #[arg(long, value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     height: Option<u32>,
-    /// `wgpu` (WGSL), `vulkan` (SPIR-V through ash) or `cpu` (the native CPU backend);
-    /// default: a real GPU if there is one, else `cpu`.
-    #[arg(long)]
-    backend: Option<String>,
+    /// Which backend runs the kernels (default: a real GPU if there is one, else `cpu`).
+    #[arg(long, value_enum)]
+    backend: Option<Backend>,
     /// Seed of every point (the reference uses a different seed derived from it).
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     seed: u32,
@@ -68,29 +73,34 @@ pub struct FiguresArgs {
     /// Comma-separated interleave factors D (odd, > 1) for Fig. 7, or `none`.
     #[arg(long, default_value = "5")]
     interleave: String,
-    /// Comma-separated columns of the figures: `path` (per-path RR, compaction), `rr`
-    /// (group RR), `rr-no` (group RR, no compaction), and beyond the paper `whole` and
-    /// `whole-no` (whole-group termination, with and without compaction; `grid` is
-    /// skipped there, as it cannot vote).
-    #[arg(long, default_value = "path,rr,rr-no")]
-    columns: String,
-    /// Continuation probability of the whole-group-end roulette (columns `whole`, `whole-no`).
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    /// Comma-separated columns of the figures: which roulette, and compaction or not
+    /// (`path` here is the paper's first column, per-path roulette with compaction).
+    #[arg(
+        long,
+        default_value = "path,rr,rr-no",
+        value_delimiter = ',',
+        value_enum
+    )]
+    columns: Vec<ColumnChoice>,
+    /// Continuation probability of the whole-group-end roulette (columns `whole`,
+    /// `whole-no`), in (0, 1].
+    #[arg(long, default_value_t = 0.5, value_parser = choices::probability, allow_negative_numbers = true)]
     end_continue: f32,
     /// Advanced: the points of a group (`normal` and every configuration at one N) take
-    /// turns on the GPU in this many slices of --time / SLICES each.
-    #[arg(long, default_value_t = 8, allow_negative_numbers = true)]
+    /// turns on the GPU in this many slices of --time / SLICES each (at least 1).
+    #[arg(long, default_value_t = 8, value_parser = choices::at_least_one(), allow_negative_numbers = true)]
     slices: u32,
-    /// `path`: the paper's implicit path tracing (the default here), or `nee`: next-event
-    /// estimation with MIS (does coherence still pay with light sampling?).
-    #[arg(long, default_value = "path")]
-    integrator: String,
+    /// The light transport estimator. The default here is `path`, the paper's implicit
+    /// path tracing, unlike `cohort render`'s `nee` (does coherence still pay with light
+    /// sampling? `--integrator nee`).
+    #[arg(long, value_enum, default_value_t = IntegratorChoice::Path)]
+    integrator: IntegratorChoice,
     /// Measure only shard K of N of the sweep (0 <= K < N): the groups (one scene, D,
     /// column and N, measured together) whose place in the plan's order is K modulo N,
     /// whole, so ratios stay clock-fair. Writes figures.shard-K-of-N.csv and no plots;
     /// `cohort figures-merge` combines the N shards' CSVs.
-    #[arg(long, value_name = "K/N")]
-    shard: Option<String>,
+    #[arg(long, value_name = "K/N", value_parser = Shard::parse)]
+    shard: Option<Shard>,
     /// Render (or reuse) the references of the sweep's scenes (of the shard's, with
     /// --shard) and stop: run it once before the shards, so that all of them measure
     /// against the same reference files in the shared --out-dir.
@@ -100,12 +110,9 @@ pub struct FiguresArgs {
 
 pub fn run(a: FiguresArgs) -> Result<(), String> {
     let plan = plan::parse(&a)?;
-    let shard = match &a.shard {
-        Some(s) => Some(Shard::parse(s).map_err(|e| format!("--shard: {e}"))?),
-        None => None,
-    };
+    let shard = a.shard;
     let groups = groups_of(&plan, shard);
-    let device = measure::open_device(a.backend.as_deref())?;
+    let device = crate::devices::one(a.backend.map(Backend::kind))?;
     std::fs::create_dir_all(&plan.out_dir)
         .map_err(|e| format!("cannot create --out-dir {}: {e}", plan.out_dir.display()))?;
     let total = points_of(&plan, &groups, a.references_only);

@@ -11,11 +11,11 @@ use cohort_render::{Algorithm, IntegratorKind};
 use cohort_scenes::embedded;
 
 use super::FiguresArgs;
+use crate::choices;
 
 pub const DEFAULT_SCENES: &str = "confroom,fairyforest,sponza,stanford";
 pub const DEFAULT_CONFIGS: &str = "normal,warp,block_256,block_512,block_1024,grid";
 pub const DEFAULT_NS: &str = "4,8,16,32,64,100,250,500,1000";
-const CONFIG_NAMES: &str = "normal, warp, block_256, block_512, block_1024, grid (or block_N, N a multiple of 32 up to 1024)";
 
 /// The columns of the figures: the paper's three (Russian roulette per path or per
 /// group, compaction or not) and whole-group termination with and without compaction.
@@ -304,28 +304,23 @@ pub fn parse(a: &FiguresArgs) -> Result<Plan, String> {
         });
     }
     let mut configs: Vec<Algorithm> = Vec::new();
-    for c in list("--configs", &a.configs)? {
-        let alg = Algorithm::parse(c).ok_or_else(|| {
-            format!("unknown config `{c}` in --configs (available: {CONFIG_NAMES})")
-        })?;
+    for c in &a.configs {
+        let alg = c.0;
         if alg == Algorithm::NORMAL {
             continue;
         }
         if configs.contains(&alg) {
-            return Err(format!("config `{c}` is listed twice in --configs"));
+            return Err(format!(
+                "config `{}` is listed twice in --configs",
+                alg.name()
+            ));
         }
         configs.push(alg);
     }
     let mut ns: Vec<u32> = Vec::new();
-    for v in list("--n", &a.n)? {
-        let n: u32 = v
-            .parse()
-            .map_err(|_| format!("bad N `{v}` in --n: not a whole number"))?;
-        if !(1..=1000).contains(&n) {
-            return Err(format!("bad N `{v}` in --n: N must be in 1..=1000"));
-        }
+    for &n in &a.n {
         if ns.contains(&n) {
-            return Err(format!("N `{v}` is listed twice in --n"));
+            return Err(format!("N `{n}` is listed twice in --n"));
         }
         ns.push(n);
     }
@@ -344,47 +339,22 @@ pub fn parse(a: &FiguresArgs) -> Result<Plan, String> {
             interleaves.push(d);
         }
     }
-    let seconds = |name: &str, t: f64| {
-        if t > 0.0 && t.is_finite() && t < 1e6 {
-            Ok(Duration::from_secs_f64(t))
-        } else {
-            Err(format!("{name} {t} must be a positive number of seconds"))
-        }
-    };
-    let time = seconds("--time", a.time)?;
-    let reference_time = seconds(
-        "--reference-time",
-        a.reference_time.unwrap_or(20.0 * a.time),
-    )?;
-    for (name, v) in [("--width", a.width), ("--height", a.height)] {
-        if v == Some(0) {
-            return Err(format!("{name} must be at least 1"));
-        }
-    }
-    if a.slices == 0 {
-        return Err("--slices must be at least 1".into());
-    }
+    // Both parsed in (0, 1e6] seconds; the default reference time is at most 20 times that.
+    let time = Duration::from_secs_f64(a.time);
+    let reference_time = Duration::from_secs_f64(a.reference_time.unwrap_or(20.0 * a.time));
     let mut columns: Vec<Column> = Vec::new();
-    for c in list("--columns", &a.columns)? {
-        let col = COLUMNS.iter().find(|k| k.key == c).ok_or_else(|| {
-            format!(
-                "unknown column `{c}` in --columns (available: {})",
-                COLUMNS.iter().map(|k| k.key).collect::<Vec<_>>().join(", ")
-            )
-        })?;
+    for c in &a.columns {
+        let key = choices::name(c);
+        let col = COLUMNS
+            .iter()
+            .find(|k| k.key == key)
+            .expect("every --columns choice is a column");
         if columns.contains(col) {
-            return Err(format!("column `{c}` is listed twice in --columns"));
+            return Err(format!("column `{key}` is listed twice in --columns"));
         }
         columns.push(*col);
     }
-    if !(a.end_continue > 0.0 && a.end_continue <= 1.0) {
-        return Err(format!(
-            "--end-continue {} is not in (0, 1]",
-            a.end_continue
-        ));
-    }
-    let integrator = IntegratorKind::parse(&a.integrator)
-        .ok_or_else(|| format!("unknown --integrator `{}` (path or nee)", a.integrator))?;
+    let integrator = a.integrator.to_render();
     Ok(Plan {
         columns,
         end_continue: a.end_continue,

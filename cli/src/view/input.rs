@@ -15,11 +15,11 @@ pub enum Action {
     ResetCamera,
     /// A render option of the focused side, by its command-line name.
     Set(String, String),
-    /// The n-th of `options::ALGORITHMS`.
+    /// The n-th of the algorithms `--algorithm` lists.
     Algorithm(usize),
     /// N of the N x 4N patches times this factor.
     ScaleN(f32),
-    /// The next value of a cycled option (`CYCLES`).
+    /// The next value of a cycled option (`next_in_cycle`).
     Cycle(&'static str),
     /// Exposure change in stops.
     Exposure(f32),
@@ -32,22 +32,26 @@ pub enum Action {
     Quit,
 }
 
-/// The options the keys cycle through, and their values in order.
-pub const CYCLES: &[(&str, &[&str])] = &[
-    ("interleave", &["1", "3", "5", "7", "9"]),
-    ("rr", &["path", "group", "whole"]),
-    ("compact", &["off", "on"]),
-    ("integrator", &["nee", "path"]),
-    ("coherent-light", &["off", "on"]),
-    ("in-patch", &["uniform", "cosine", "equal-area"]),
-];
+/// The values of an option the keys cycle through, in order: the names of a choice (as the
+/// command line lists them), off and on, or interleave factors. `None`: not a cycled option.
+fn cycle(name: &str) -> Option<Vec<String>> {
+    use crate::choices::{names, InPatchChoice, IntegratorChoice, RrChoice};
+    Some(match name {
+        "interleave" => ["1", "3", "5", "7", "9"].map(String::from).to_vec(),
+        "compact" | "coherent-light" => vec!["off".into(), "on".into()],
+        "rr" => names::<RrChoice>(),
+        "integrator" => names::<IntegratorChoice>(),
+        "in-patch" => names::<InPatchChoice>(),
+        _ => return None,
+    })
+}
 
 /// The value after `current` in the cycle of `name` (the first one if `current` is not
 /// in it).
-pub fn next_in_cycle(name: &str, current: &str) -> Option<&'static str> {
-    let (_, values) = CYCLES.iter().find(|(n, _)| *n == name)?;
-    let i = values.iter().position(|v| *v == current);
-    Some(values[i.map_or(0, |i| (i + 1) % values.len())])
+pub fn next_in_cycle(name: &str, current: &str) -> Option<String> {
+    let values = cycle(name)?;
+    let i = values.iter().position(|v| v == current);
+    Some(values[i.map_or(0, |i| (i + 1) % values.len())].clone())
 }
 
 /// The action of a key, by the name a script uses: the character it types (`w`, `N`,
@@ -102,9 +106,11 @@ mod tests {
 
     #[test]
     fn every_cycle_wraps_and_every_listed_key_acts() {
-        assert_eq!(next_in_cycle("interleave", "9"), Some("1"));
-        assert_eq!(next_in_cycle("rr", "path"), Some("group"));
-        assert_eq!(next_in_cycle("compact", "true"), Some("off"));
+        let next = |name, current| next_in_cycle(name, current).unwrap();
+        assert_eq!(next("interleave", "9"), "1");
+        assert_eq!(next("rr", "path"), "group");
+        assert_eq!(next("in-patch", "equal-area"), "uniform");
+        assert_eq!(next("compact", "true"), "off");
         assert_eq!(next_in_cycle("colour", "red"), None);
         for k in [
             "w", "a", "s", "d", "q", "e", "r", "1", "6", "n", "N", "i", "g", "c", "l", "k", "u",

@@ -94,27 +94,36 @@ pub fn run(a: ViewArgs) -> Result<(), String> {
                 .map_err(|e| format!("--compare: {e}"))?,
         );
     }
+    // Without --paths or --time the viewer renders until it is closed.
+    let budget = r
+        .budget()
+        .unwrap_or(Budget::KernelTime(Duration::from_secs(u32::MAX as u64)));
+    let embedded = r.is_embedded_scene();
+    let options: Vec<RenderOptions> = configs
+        .iter()
+        .map(|c| RenderOptions {
+            budget,
+            ..c.options(embedded)
+        })
+        .collect();
+    for o in &options {
+        r.check_before_scene(o)?;
+    }
     let display = check_display()?;
     let scene = r.load_scene()?;
     let size = r.size(&scene);
     let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
-    // Without --paths or --time the viewer renders until it is closed.
-    let budget = r
-        .budget()?
-        .unwrap_or(Budget::KernelTime(Duration::from_secs(u32::MAX as u64)));
     let base = RenderOptions {
         budget,
         size: Some((w, h)),
         ..Default::default()
     };
-    let embedded = r.is_embedded_scene();
-    let options = configs
-        .iter()
-        .map(|c| {
+    let options = options
+        .into_iter()
+        .map(|o| {
             let o = RenderOptions {
-                budget,
                 size: Some((w, h)),
-                ..c.options(embedded)?
+                ..o
             };
             o.check(w, h).map_err(|e| e.to_string())?;
             Ok(o)
@@ -134,7 +143,7 @@ pub fn run(a: ViewArgs) -> Result<(), String> {
     let setup = Setup {
         scene,
         scene_name: r.scene.clone(),
-        backend: r.backend.clone(),
+        backend: r.backend.map(crate::choices::Backend::kind),
         options: options.clone(),
         exposure: r.exposure,
         out: r.out.clone(),

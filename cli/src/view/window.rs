@@ -19,7 +19,8 @@ use super::input::{key_action, next_in_cycle, Action, HELP};
 use super::panel::{self, Canvas, Line};
 use super::worker::{Command, Presented, Published, Shared};
 use super::UserEvent;
-use crate::options::{Config, ALGORITHMS};
+use crate::choices::AlgorithmChoice;
+use crate::options::Config;
 use cohort_render::RenderOptions;
 
 /// The smallest window height, so that the panel fits beside small images.
@@ -139,7 +140,9 @@ impl App {
             }
             Action::Algorithm(i) => {
                 let mut c = self.configs[self.focus].clone();
-                c.algorithm = ALGORITHMS.get(i).ok_or("no such algorithm")?.to_string();
+                c.algorithm = *<AlgorithmChoice as clap::ValueEnum>::value_variants()
+                    .get(i)
+                    .ok_or("no such algorithm")?;
                 self.configure(c)?;
                 false
             }
@@ -151,19 +154,10 @@ impl App {
             }
             Action::Cycle(name) => {
                 let c = &self.configs[self.focus];
-                let on_off = |b: bool| if b { "on" } else { "off" };
-                let current = match name {
-                    "interleave" => c.interleave.to_string(),
-                    "rr" => c.rr.clone(),
-                    "compact" => on_off(c.compact).into(),
-                    "integrator" => c.integrator.clone(),
-                    "coherent-light" => on_off(c.coherent_light).into(),
-                    "in-patch" => c.in_patch.clone(),
-                    _ => String::new(),
-                };
+                let current = c.get(name).unwrap_or_default();
                 let next = next_in_cycle(name, &current).ok_or("no such option")?;
                 let mut c = c.clone();
-                c.set(name, next)?;
+                c.set(name, &next)?;
                 self.configure(c)?;
                 false
             }
@@ -209,7 +203,7 @@ impl App {
         let opts = RenderOptions {
             budget: self.base.budget,
             size: self.base.size,
-            ..c.options(self.embedded)?
+            ..c.options(self.embedded)
         };
         let (w, h) = self.image_size;
         opts.check(w, h).map_err(|e| e.to_string())?;

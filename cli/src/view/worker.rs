@@ -78,7 +78,7 @@ pub struct Presented {
 pub struct Setup {
     pub scene: Scene,
     pub scene_name: String,
-    pub backend: Option<String>,
+    pub backend: Option<cohort::runtime::BackendKind>,
     /// One per side.
     pub options: Vec<RenderOptions>,
     pub exposure: f32,
@@ -108,7 +108,7 @@ pub fn run(
     shared: Arc<Shared>,
     wake: impl Fn(),
 ) -> Result<(), String> {
-    let device = crate::devices::open(setup.backend.as_deref(), None)?.remove(0);
+    let device = crate::devices::one(setup.backend)?;
     *shared.device.lock().unwrap() = Some(format!(
         "{} [{}]",
         device.info().adapter_name,
