@@ -566,16 +566,22 @@ fn group_end(toks: &[Tok], open: usize) -> usize {
 }
 
 /// Splits `toks` at the commas outside any group (and, with `angles`, outside `<..>`).
+/// Angles count only outside brackets: inside an attribute, `<` is an operator
+/// (`default_value_t = 1 << 17`), not a type's generics.
 fn split_commas(toks: &[Tok], angles: bool) -> Vec<&[Tok]> {
     let mut out = Vec::new();
-    let (mut depth, mut start) = (0i32, 0);
+    let (mut depth, mut angle, mut start) = (0i32, 0i32, 0);
     for (i, t) in toks.iter().enumerate() {
         match t {
             Tok::Punct('(' | '[' | '{') => depth += 1,
             Tok::Punct(')' | ']' | '}') => depth -= 1,
-            Tok::Punct('<') if angles => depth += 1,
-            Tok::Punct('>') if angles && !(i > 0 && is_punct(toks.get(i - 1), '-')) => depth -= 1,
-            Tok::Punct(',') if depth == 0 => {
+            Tok::Punct('<') if angles && depth == 0 => angle += 1,
+            Tok::Punct('>')
+                if angles && depth == 0 && !(i > 0 && is_punct(toks.get(i - 1), '-')) =>
+            {
+                angle -= 1
+            }
+            Tok::Punct(',') if depth == 0 && angle == 0 => {
                 out.push(&toks[start..i]);
                 start = i + 1;
             }
