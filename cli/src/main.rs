@@ -12,7 +12,7 @@ use choices::{
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
 use cohort_render::provenance::Provenance;
-use cohort_render::{output, Budget, RenderOptions, Renderer, Shard};
+use cohort_render::{output, Budget, GpuScene, RenderOptions, Renderer, SceneBvh, Shard};
 use cohort_scenes::embedded;
 use options::Config;
 
@@ -327,6 +327,14 @@ impl RenderArgs {
     }
 }
 
+/// When the scene had loaded, the device had opened (on its own thread) and the BVH had
+/// been built, from the start of `render`.
+struct Opened {
+    scene_loaded: std::time::Duration,
+    device_opened: std::time::Duration,
+    bvh_built: std::time::Duration,
+}
+
 fn render(a: RenderArgs) -> Result<(), String> {
     let process_start = std::time::Instant::now();
     let config = a.config();
@@ -344,30 +352,56 @@ fn render(a: RenderArgs) -> Result<(), String> {
     {
         output::check_destination(path).map_err(|e| e.to_string())?;
     }
-    let scene = a.load_scene()?;
-    let scene_loaded = process_start.elapsed();
-    // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
-    let budget = a
-        .known_budget()
-        .unwrap_or(Budget::PathsPerPixel(scene.sample_count.max(1)));
-    let size = a.size(&scene);
-    let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
-    let opts = RenderOptions {
-        budget,
-        size,
-        ..configured
-    };
-    // With the scene's size and budget, before the device is opened.
-    opts.check(w, h).map_err(|e| e.to_string())?;
+    // The device opens on its own thread while the scene loads and (for one device) its
+    // BVH is built: neither needs the other.
+    let (scene, built, devices, opts, times) = std::thread::scope(|threads| {
+        let opening = threads.spawn(|| {
+            let devices = devices::open(a.backend.map(Backend::kind), a.devices.as_ref());
+            (devices, process_start.elapsed())
+        });
+        let loaded = (|| {
+            let scene = a.load_scene()?;
+            let scene_loaded = process_start.elapsed();
+            // A Mitsuba scene renders its sampler's sample count, as Mitsuba would.
+            let budget = a
+                .known_budget()
+                .unwrap_or(Budget::PathsPerPixel(scene.sample_count.max(1)));
+            let size = a.size(&scene);
+            let (w, h) = size.unwrap_or((scene.camera.width, scene.camera.height));
+            let opts = RenderOptions {
+                budget,
+                size,
+                ..configured
+            };
+            // With the scene's size and budget, before anything is uploaded.
+            opts.check(w, h).map_err(|e| e.to_string())?;
+            // Several devices: each renderer builds and uploads its own.
+            let built = match a.devices {
+                None => Some(SceneBvh::build(&scene).map_err(|e| e.to_string())?),
+                Some(_) => None,
+            };
+            Ok::<_, String>((scene, scene_loaded, opts, built))
+        })();
+        let (devices, device_opened) = opening.join().expect("the device thread panicked");
+        let (scene, scene_loaded, opts, built) = loaded?;
+        let times = Opened {
+            scene_loaded,
+            device_opened,
+            bvh_built: process_start.elapsed(),
+        };
+        Ok::<_, String>((scene, built, devices?, opts, times))
+    })?;
+    let (w, h) = opts
+        .size
+        .unwrap_or((scene.camera.width, scene.camera.height));
     let RenderOptions {
         algorithm,
         group_rr,
         whole_group_end,
         integrator,
+        budget,
         ..
     } = opts;
-    let devices = devices::open(a.backend.map(Backend::kind), a.devices.as_ref())?;
-    let device_opened = process_start.elapsed();
     let info = devices[0].info().clone();
     for w in cohort_render::roulette::warnings(&scene, &opts) {
         eprintln!("warning: {w}");
@@ -378,8 +412,17 @@ fn render(a: RenderArgs) -> Result<(), String> {
         .collect();
     // One device: the renderer is made here, so that its startup (BVH build, upload,
     // pipelines) is reported apart from the render. Several: one thread per device.
-    let mut single = match devices.as_slice() {
-        [device] => Some(Renderer::new(device, &scene, opts.clone()).map_err(|e| e.to_string())?),
+    let mut single = match (devices.as_slice(), built) {
+        ([device], Some(built)) => {
+            let gpu = GpuScene::upload_built(device, &scene, built).map_err(|e| e.to_string())?;
+            Some(
+                Renderer::with_scene(device, &scene, gpu, opts.clone())
+                    .map_err(|e| e.to_string())?,
+            )
+        }
+        ([device], None) => {
+            Some(Renderer::new(device, &scene, opts.clone()).map_err(|e| e.to_string())?)
+        }
         _ => None,
     };
     // Everything before the first iteration: the render starts right after this.
@@ -436,6 +479,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
     // The two files are encoded at once, on two threads: at 1024x1024 each takes a tenth
     // of a second or more, as long as a short render itself (BENCHMARKS.md, session 17).
     let attributes = provenance.to_attributes();
+    let writing = std::time::Instant::now();
     // Both are written to temporary files first and put in place only when both were
     // written: a failure leaves both existing files as they were.
     let (exr, png) = std::thread::scope(|threads| {
@@ -449,6 +493,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
     );
     exr.commit().map_err(|e| e.to_string())?;
     png.commit().map_err(|e| e.to_string())?;
+    let written = writing.elapsed();
     let k = stats.kernel;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!(
@@ -524,14 +569,20 @@ fn render(a: RenderArgs) -> Result<(), String> {
             ms(stats.host.submit),
             ms(stats.host.wait)
         );
+        // Every millisecond to the first iteration: the scene and its BVH on this thread
+        // while the device opens on another, then upload and pipelines, and whatever the
+        // renderer's set-up took besides (buffers, the frame).
+        let parallel = times.bvh_built.max(times.device_opened);
+        let other = ready.saturating_sub(parallel + startup.upload + startup.pipelines);
         println!(
-            "startup        {:.3} s to the first iteration: scene load {:.3}, device {:.3}, BVH build {:.3}, upload {:.3}, pipelines {:.3} (shading {})",
+            "startup        {:.3} s to the first iteration: scene load {:.3} + BVH build {:.3} beside device {:.3}, then upload {:.3}, pipelines {:.3}, other {:.3} (shading {})",
             ready.as_secs_f64(),
-            scene_loaded.as_secs_f64(),
-            (device_opened - scene_loaded).as_secs_f64(),
+            times.scene_loaded.as_secs_f64(),
             startup.bvh_build.as_secs_f64(),
+            times.device_opened.as_secs_f64(),
             startup.upload.as_secs_f64(),
             startup.pipelines.as_secs_f64(),
+            other.as_secs_f64(),
             cohort_render::shading::label(startup.shading)
         );
     } else {
@@ -548,7 +599,12 @@ fn render(a: RenderArgs) -> Result<(), String> {
         image.mean().y,
         image.mean().z
     );
-    println!("wrote          {} and {}", a.out.display(), a.png.display());
+    println!(
+        "wrote          {} and {} in {:.3} s",
+        a.out.display(),
+        a.png.display(),
+        written.as_secs_f64()
+    );
     if let Some(path) = &a.stats {
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
@@ -560,9 +616,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "iterations": stats.iterations, "rays": stats.rays, "slots": stats.slots,
             "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "reorder": ms(k.reorder), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
-            "wall_s": stats.wall.as_secs_f64(),
+            "wall_s": stats.wall.as_secs_f64(), "outputs_s": written.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
-            "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": scene_loaded.as_secs_f64(), "device": (device_opened - scene_loaded).as_secs_f64(),
+            "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": times.scene_loaded.as_secs_f64(), "device": times.device_opened.as_secs_f64(),
                 "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64() },
             "shading": cohort_render::shading::label(startup.shading),
             "scene_integrator": {

@@ -45,22 +45,49 @@ pub struct GpuScene {
     pub shading: u32,
 }
 
+/// A scene's BVH as the renderer traverses it, built on the host, and how long that took.
+pub struct SceneBvh {
+    pub bvh: GpuBvh,
+    /// Its 8-wide form, where the traversal's stack holds the tree.
+    pub wide: Option<GpuBvh8>,
+    pub time: std::time::Duration,
+}
+
+impl SceneBvh {
+    pub fn build(scene: &Scene) -> Result<SceneBvh, crate::RenderError> {
+        let started = std::time::Instant::now();
+        // Leaves of at most 4 triangles (see `cohort_scenes::bvh::wide::WIDE_MAX_LEAF`): faster
+        // for the 8-wide kernel and for the BVH2 kernel alike.
+        let (bvh, wide) =
+            GpuBvh8::build_scene(scene).map_err(|e| crate::RenderError::Bvh(e.to_string()))?;
+        Ok(SceneBvh {
+            bvh,
+            wide,
+            time: started.elapsed(),
+        })
+    }
+}
+
 impl GpuScene {
     /// Builds the BVH of `scene` and uploads everything the kernels read.
     pub fn prepare(
         device: &Device,
         scene: &Scene,
     ) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
-        // Leaves of at most 4 triangles (see `cohort_scenes::bvh::wide::WIDE_MAX_LEAF`): faster
-        // for the 8-wide kernel and for the BVH2 kernel alike.
-        let (bvh, wide) =
-            GpuBvh8::build_scene(scene).map_err(|e| crate::RenderError::Bvh(e.to_string()))?;
-        Ok(std::sync::Arc::new(GpuScene::upload_with(
-            device,
-            scene,
-            &bvh,
-            wide.as_ref(),
-        )?))
+        let built = SceneBvh::build(scene)?;
+        GpuScene::upload_built(device, scene, built)
+    }
+
+    /// Uploads a scene whose BVH was built already (on the host, without a device: a
+    /// caller can build it while the device opens).
+    pub fn upload_built(
+        device: &Device,
+        scene: &Scene,
+        built: SceneBvh,
+    ) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
+        let mut gpu = GpuScene::upload_with(device, scene, &built.bvh, built.wide.as_ref())?;
+        gpu.bvh_build = built.time;
+        Ok(std::sync::Arc::new(gpu))
     }
 
     /// Uploads `bvh` and its 8-wide form (built here).

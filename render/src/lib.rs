@@ -20,7 +20,7 @@ pub mod validate;
 pub mod wavefront;
 
 pub use cohort_kernels::shading;
-pub use gpu_scene::GpuScene;
+pub use gpu_scene::{GpuScene, SceneBvh};
 pub use image::Image;
 pub use renderer::{
     Algorithm, Budget, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
