@@ -7,10 +7,10 @@
 # Needs: $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
 # unpacked and trimmed to cuda_ad_rgb and the scenes' plugins, as a tar.xz of a `site`
 # folder), $SCENES/{cornell-box,stanford-like}. On the device:
-#   OUT=$OUT B=gpu-pack2 SITE=gpu-mitsuba/site.tar.xz SCENES=gpu-scenes scripts/gpu-sizes-vs-mitsuba.sh
+#   OUT=$OUT B=gpu-pack2 SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
-B="${B:-gpu-pack2}"; SITE="${SITE:-gpu-mitsuba/site.tar.xz}"; SCENES="${SCENES:-gpu-scenes}"
+B="${B:-gpu-pack2}"; SITE="${SITE:-gpu-mitsuba/site.tar.xz}"; SCENES="${SCENES:-render/tests/scenes}"
 (cd "$B" && xz -dkf cohort.xz && chmod +x cohort) || exit 1
 tar -C /tmp -xJf "$SITE" || exit 1
 export PYTHONPATH=/tmp/site PYTHONUNBUFFERED=1 COHORT_VK_VALIDATION=0

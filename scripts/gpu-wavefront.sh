@@ -5,12 +5,12 @@
 # check that `--wavefront 1` is the old renderer. Cornell box (embedded) and stanford-like
 # (`$SCENES/stanford-like/scene.xml`) at 128, 256, 512 and 1024 square, 2 s of kernel time
 # each; then every paper configuration at 128 and 1024 for render wall against kernel time.
-# Usage on the device: OUT=$OUT B=gpu-pack2 SCENES=gpu-scenes scripts/gpu-wavefront.sh
+# Usage on the device: OUT=$OUT B=gpu-pack2 scripts/gpu-wavefront.sh
 # (the binaries xz-packed in $B, as scripts/build-gpu-bins.sh leaves them).
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"
 B="${B:-gpu-pack2}"
-SCENES="${SCENES:-gpu-scenes}"
+SCENES="${SCENES:-render/tests/scenes}"
 mkdir -p "$OUT"
 (cd "$B" && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort*) || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
