@@ -5,17 +5,23 @@
 //! EXRs ([`provenance`] in the header, path counts per pixel) [`input`] reads back and
 //! [`merge`] combines; [`multi_device`] does both in one process, on several devices.
 
+mod error;
 pub mod gpu_scene;
 pub mod image;
 pub mod input;
+mod iteration;
+mod kernels;
 pub mod lights;
 pub mod merge;
 pub mod multi_device;
+mod options;
 pub mod output;
+mod paths;
 pub mod provenance;
 pub mod renderer;
 pub mod roulette;
 pub mod shard;
+mod stats;
 pub mod validate;
 pub mod wavefront;
 

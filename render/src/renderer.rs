@@ -8,381 +8,45 @@
 //! several renderers can take turns on the GPU (`cohort figures` does, so that each sees
 //! the same clock changes). [`Renderer::render`] is one start and one advance.
 
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use cohort::runtime::{
-    Batch, Device, DispatchStats, GpuBuffer, KernelArtifact, ReadBack, RuntimeError, Submission,
-};
-use cohort::Group;
-use cohort_kernels::compact;
+use cohort::runtime::{Device, DispatchStats, GpuBuffer, ReadBack, Submission};
 use cohort_kernels::display::{display, DisplayParams};
-use cohort_kernels::extend::{extend, init_paths};
-use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
+use cohort_kernels::extend::init_paths;
+use cohort_kernels::integrator::Integrator;
 use cohort_kernels::layout::Frame;
-use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
-use cohort_kernels::reorder;
-use cohort_kernels::sampling::{
-    CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
-};
-use cohort_kernels::traverse::{trace_shadow, traverse};
-use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+use cohort_kernels::path_end::PathEnd;
+use cohort_kernels::sampling::DiffuseSampler;
 use cohort_scenes::{morton_pixel_order, Camera, Scene};
-use glam::{UVec4, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
-use crate::{GpuScene, Image, Shard};
+use crate::iteration::{LabelledBatch, Stage, Wavefront};
+use crate::kernels::{Advance, Prepare};
+use crate::options::validate;
+use crate::paths::Paths;
+use crate::{GpuScene, Image};
 
-/// A configuration of the paper: which invocations share a coherent draw, and whether
-/// diffuse bounces sample coherently at all.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Algorithm {
-    pub group: Group,
-    /// false: the reference `normal` (independent cosine sampling per path).
-    pub coherent: bool,
-}
+// The renderer's vocabulary, at the paths it has always had (`cohort_render::renderer::X`).
+pub use crate::error::RenderError;
+pub use crate::options::{
+    interleave_permutes, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions,
+};
+pub use crate::stats::{HostTimes, KernelTimes, RenderStats, Startup};
 
-impl Algorithm {
-    pub const NORMAL: Algorithm = Algorithm {
-        group: Group::Thread,
-        coherent: false,
-    };
-
-    /// `normal`, `warp`, `block_256`, `block_512`, `block_1024`, `grid` (and any
-    /// `block_N` with N a multiple of 32 up to 1024).
-    pub fn parse(s: &str) -> Option<Algorithm> {
-        if s == "normal" {
-            return Some(Algorithm::NORMAL);
-        }
-        let group = Group::parse(s)?;
-        match group {
-            Group::Thread => None,
-            Group::Block(n) if n % 32 != 0 => None,
-            _ => Some(Algorithm {
-                group,
-                coherent: true,
-            }),
-        }
-    }
-
-    pub fn name(self) -> String {
-        if self.coherent {
-            self.group.label()
-        } else {
-            "normal".into()
-        }
-    }
-}
-
-/// How a ray samples inside its group's patch.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InPatch {
-    /// Uniform by solid angle, weighted by the exact pdf (the paper).
-    Uniform,
-    /// Cosine-weighted: pdf exactly cos/pi (beyond the paper).
-    Cosine,
-    /// Equal-area patches through the Shirley–Chiu concentric map (beyond the paper).
-    EqualArea,
-}
-
-/// The light transport estimator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum IntegratorKind {
-    /// Implicit path tracing: a path contributes only when it reaches an emitter (the
-    /// paper's renderer).
-    Path,
-    /// Next-event estimation with MIS (Mitsuba's `path` integrator).
-    Nee,
-}
-
-impl IntegratorKind {
-    pub fn parse(s: &str) -> Option<IntegratorKind> {
-        match s {
-            "path" => Some(IntegratorKind::Path),
-            "nee" => Some(IntegratorKind::Nee),
-            _ => None,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            IntegratorKind::Path => "path",
-            IntegratorKind::Nee => "nee",
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-pub enum Budget {
-    /// Every pixel completes exactly this many paths.
-    PathsPerPixel(u32),
-    /// Accumulated GPU time of traverse + extend + compact, as the paper measures.
-    KernelTime(Duration),
-}
-
-#[derive(Clone, Debug)]
-pub struct RenderOptions {
-    pub algorithm: Algorithm,
-    pub in_patch: InPatch,
-    /// N of the N x 4N patches (1..=1000).
-    pub patches_n: u32,
-    /// One Russian-roulette draw per group (`_rr`).
-    pub group_rr: bool,
-    /// Interleaved sampling: pixel coordinates multiplied by this odd factor (1 = off).
-    pub interleave: u32,
-    /// Glossy bounces sample coherently too (beyond the paper).
-    pub coherent_glossy: bool,
-    pub budget: Budget,
-    pub seed: u32,
-    /// Film size; `None` keeps the scene's.
-    pub size: Option<(u32, u32)>,
-    /// Run the compaction kernels (the paper's `(NO)` variants turn it off).
-    pub compact: bool,
-    /// Ray reordering (`cohort_kernels::reorder`): every this many iterations, sort the
-    /// live rays by direction octant and origin cell before the traversal; 0 = never.
-    /// The image is the same; only the traversal's order of rays changes.
-    pub reorder: u32,
-    /// Russian roulette continuation probability (the paper: 0.8).
-    pub rr_continue: f32,
-    /// Which Russian roulette ends paths: the paper's fixed `rr_continue` (the default), or
-    /// Mitsuba's throughput-based one from the scene's `rr_depth`.
-    pub roulette: crate::Roulette,
-    /// Whole-group termination (beyond the paper): when a path of a group ends, the
-    /// group's other paths play one shared roulette with this continuation probability
-    /// (`cohort_kernels::path_end`). `None`: paths end one by one. Needs warp or block groups.
-    pub whole_group_end: Option<f32>,
-    /// Implicit path tracing or next-event estimation.
-    pub integrator: IntegratorKind,
-    /// Coherent light sampling (beyond the paper): a group shares its light pick and a
-    /// stratum of the light (`cohort_kernels::light`). Needs `integrator: Nee`.
-    pub coherent_light: bool,
-    /// K of the K x K strata of coherent light sampling (1..=64).
-    pub light_cells: u32,
-    /// Which part of the budget's paths this run renders (`crate::shard`): shard K of N
-    /// renders paths K*P/N..(K+1)*P/N of every pixel under a budget of P paths per pixel.
-    pub shard: Shard,
-    /// Ray slots to keep in flight: the wavefront holds this many paths at once (rounded
-    /// up to whole copies of the image, several paths of each pixel; `crate::wavefront`).
-    /// `None`: chosen from the device, enough to fill a GPU.
-    pub wavefront: Option<u32>,
-}
-
-impl RenderOptions {
-    /// Whether every random number a path draws depends only on (seed, pixel, path):
-    /// independent diffuse sampling, per-path roulette and independent light samples.
-    /// Then the shards of a paths budget merge into the unsplit run's image; otherwise
-    /// group draws keyed by iteration enter, and the merge is statistical.
-    /// Whether a renderer of a `width` x `height` image takes these options; the error
-    /// says what is wrong (what `Renderer::new` and `reconfigure` would return).
-    pub fn check(&self, width: u32, height: u32) -> Result<(), RenderError> {
-        validate(self, width, height)
-    }
-
-    pub fn per_path_sampling(&self) -> bool {
-        !self.algorithm.coherent
-            && !self.group_rr
-            && self.whole_group_end.is_none()
-            && !self.coherent_light
-    }
-
-    /// The paths of every pixel this run renders: (first path index, how many; 0 for a
-    /// time budget, which never stops a pixel).
-    pub(crate) fn path_range(&self) -> (u32, u32) {
-        match self.budget {
-            Budget::PathsPerPixel(p) => {
-                let r = self.shard.paths(p);
-                (r.start, r.end - r.start)
-            }
-            Budget::KernelTime(_) => (self.shard.time_first_path(), 0),
-        }
-    }
-
-    /// The budget of this run's own paths: a shard's share of a paths budget.
-    fn shard_budget(&self) -> Budget {
-        match self.budget {
-            Budget::PathsPerPixel(_) => Budget::PathsPerPixel(self.path_range().1),
-            time => time,
-        }
-    }
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            algorithm: Algorithm::NORMAL,
-            in_patch: InPatch::Uniform,
-            patches_n: 64,
-            group_rr: false,
-            interleave: 1,
-            coherent_glossy: false,
-            budget: Budget::PathsPerPixel(16),
-            seed: 1,
-            size: None,
-            compact: true,
-            reorder: 0,
-            rr_continue: 0.8,
-            roulette: crate::Roulette::Fixed,
-            whole_group_end: None,
-            integrator: IntegratorKind::Path,
-            coherent_light: false,
-            light_cells: 4,
-            shard: Shard::WHOLE,
-            wavefront: None,
-        }
-    }
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error(transparent)]
-    Runtime(#[from] RuntimeError),
-    #[error(transparent)]
-    Kernel(#[from] cohort::Error),
-    #[error(transparent)]
-    Compile(#[from] cohort::emit::CompileError),
-    #[error("cannot build the BVH: {0}")]
-    Bvh(String),
-    #[error("{0}")]
-    Options(String),
-}
-
-#[derive(Clone, Copy, Debug, Default)]
-pub struct KernelTimes {
-    pub traverse: Duration,
-    pub extend: Duration,
-    /// The shadow pass of next-event estimation.
-    pub shadow: Duration,
-    pub compact: Duration,
-    /// Sorting the rays before the traversal (`RenderOptions::reorder`).
-    pub reorder: Duration,
-}
-impl KernelTimes {
-    pub fn total(&self) -> Duration {
-        self.traverse + self.extend + self.shadow + self.compact + self.reorder
-    }
-    /// Adds `t` to the time of `stage`.
-    fn add(&mut self, stage: Stage, t: Duration) {
-        match stage {
-            Stage::Traverse => self.traverse += t,
-            Stage::Extend => self.extend += t,
-            Stage::Shadow => self.shadow += t,
-            Stage::Compact => self.compact += t,
-            Stage::Reorder => self.reorder += t,
-        }
-    }
-}
-
-/// The stages of one iteration, in order; every dispatch is labelled with its stage so
-/// that timings are summed by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Stage {
-    /// Sort the live rays for the traversal (every `RenderOptions::reorder` iterations).
-    Reorder,
-    /// Closest hit of every live ray.
-    Traverse,
-    /// Shade, sample lights and the next direction, end or continue paths.
-    Extend,
-    /// Occlusion of the light samples; finish the slots (next-event estimation only).
-    Shadow,
-    /// Stable partition of the live rays.
-    Compact,
-}
-
-#[derive(Clone, Debug, Default)]
-pub struct RenderStats {
-    pub iterations: u32,
-    pub completed_paths: u64,
-    /// Rays traversed (live rays summed over iterations).
-    pub rays: u64,
-    pub kernel: KernelTimes,
-    pub wall: Duration,
-    pub pixels: u64,
-    /// Ray slots of the wavefront: paths in flight at once (`RenderOptions::wavefront`).
-    pub slots: u64,
-    /// Where the host's time went: recording batches, submitting them, and waiting for
-    /// the oldest one in flight (the GPU is busy then; recording while it is idle is
-    /// what makes the wall time exceed the kernel time).
-    pub host: HostTimes,
-}
-
-/// Host time of a render, by stage.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct HostTimes {
-    /// Batches submitted.
-    pub batches: u32,
-    pub record: Duration,
-    pub submit: Duration,
-    pub wait: Duration,
-}
-
-impl RenderStats {
-    pub fn paths_per_pixel(&self) -> f64 {
-        self.completed_paths as f64 / self.pixels.max(1) as f64
-    }
-    /// Completed paths per second of kernel time.
-    pub fn paths_per_second(&self) -> f64 {
-        self.completed_paths as f64 / self.kernel.total().as_secs_f64().max(1e-12)
-    }
-    /// Rays per second of traversal kernel time.
-    pub fn rays_per_second(&self) -> f64 {
-        self.rays as f64 / self.kernel.traverse.as_secs_f64().max(1e-12)
-    }
-}
-
-/// Path state, structure of arrays, one entry per ray slot.
-struct Paths {
-    slot_pixel: GpuBuffer<u32>,
-    /// The camera's reconstruction filter as `extend::film_sample` reads it
-    /// (`cohort_scenes::FilmFilter::table`; one unused zero for the box).
-    film_filter: GpuBuffer<f32>,
-    idrays: [GpuBuffer<u32>; 2],
-    state: GpuBuffer<UVec4>,
-    ray_o: GpuBuffer<Vec4>,
-    ray_d: GpuBuffer<Vec4>,
-    beta: GpuBuffer<Vec4>,
-    radiance: GpuBuffer<Vec4>,
-    hits: GpuBuffer<Vec4>,
-    accum: GpuBuffer<Vec4>,
-    /// Next-event estimation: each slot's shadow ray (origin, tmax), (direction, status)
-    /// and unoccluded light-sample contribution.
-    shadow_o: GpuBuffer<Vec4>,
-    shadow_d: GpuBuffer<Vec4>,
-    nee: GpuBuffer<Vec4>,
-    flags: GpuBuffer<u32>,
-    /// Ray reordering's buffers, allocated by the first run that sorts.
-    sort: Option<SortState>,
-    count: GpuBuffer<u32>,
-    block_sums: GpuBuffer<u32>,
-    total: GpuBuffer<u32>,
-    /// [completed paths, slots done]
-    counters: GpuBuffer<u32>,
-}
-
+/// The wavefront path tracer: one scene on one device, its path state and the run in
+/// progress.
 pub struct Renderer<'d> {
-    device: &'d Device,
-    scene: std::sync::Arc<GpuScene>,
-    frame: Frame,
-    paths: Paths,
+    pub(crate) device: &'d Device,
+    pub(crate) scene: std::sync::Arc<GpuScene>,
+    pub(crate) frame: Frame,
+    pub(crate) paths: Paths,
     slot_to_pixel: Vec<u32>,
-    opts: RenderOptions,
+    pub(crate) opts: RenderOptions,
     /// The camera at the rendered size (the scene's, until `set_camera`).
     camera: Camera,
     /// The run in progress: `None` until `start`.
     run: Option<Run>,
-    startup: Startup,
-}
-
-/// Where the time before the first iteration went (the scene's share is measured by
-/// `GpuScene::prepare`).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Startup {
-    /// BVH build (binary and 8-wide) on the host.
-    pub bvh_build: Duration,
-    /// Uploading the scene and allocating the path state.
-    pub upload: Duration,
-    /// Pipeline creation of the kernels the options use (prepared before any render).
-    pub pipelines: Duration,
-    /// What `extend` was built for: the scene's BSDF kinds and shading features
-    /// (`cohort_kernels::shading`, whose `label` names them).
-    pub shading: u32,
+    pub(crate) startup: Startup,
 }
 
 /// What a run carries from one `advance` to the next.
@@ -472,33 +136,8 @@ impl<'d> Renderer<'d> {
         apply_camera(&mut frame, &camera);
         apply_options(&mut frame, &opts);
         let allocated = Instant::now();
-        let n = n as usize;
         let slot_to_pixel = slot_order(w, h, opts.interleave).repeat(copies as usize);
-        let blocks = compact::scratch_len(n);
-        let paths = Paths {
-            slot_pixel: device.upload(&slot_to_pixel)?,
-            film_filter: match &camera.filter {
-                Some(filter) => device.upload(&filter.table())?,
-                None => device.upload(&[0.0f32])?,
-            },
-            idrays: [device.alloc(n)?, device.alloc(n)?],
-            state: device.alloc(n)?,
-            ray_o: device.alloc(n)?,
-            ray_d: device.alloc(n)?,
-            beta: device.alloc(n)?,
-            radiance: device.alloc(n)?,
-            hits: device.alloc(n)?,
-            accum: device.alloc(n)?,
-            shadow_o: device.alloc(n)?,
-            shadow_d: device.alloc(n)?,
-            nee: device.alloc(n)?,
-            flags: device.alloc(n)?,
-            sort: None,
-            count: device.upload(&[n as u32])?,
-            block_sums: device.alloc(blocks)?,
-            total: device.alloc(1)?,
-            counters: device.alloc(2)?,
-        };
+        let paths = Paths::alloc(device, &slot_to_pixel, &camera)?;
         let startup = Startup {
             bvh_build: gpu.bvh_build,
             upload: gpu.upload + allocated.elapsed(),
@@ -729,120 +368,7 @@ impl<'d> Renderer<'d> {
         })
     }
 
-    /// Runs `op` with the kernel types of the current options: the diffuse strategy `S`,
-    /// the path-end policy `E` and the integrator `I` are chosen here, once, from the
-    /// options, for every operation that needs them.
-    fn with_kernels<O: KernelOp>(&mut self, op: O) -> O::Out {
-        match (self.opts.algorithm.coherent, self.opts.in_patch) {
-            (false, _) => self.with_sampler::<Cosine, O>(op),
-            (true, InPatch::Uniform) => self.with_sampler::<CoherentUniform, O>(op),
-            (true, InPatch::Cosine) => self.with_sampler::<CoherentCosine, O>(op),
-            (true, InPatch::EqualArea) => self.with_sampler::<CoherentEqualArea, O>(op),
-        }
-    }
-
-    fn with_sampler<S: DiffuseSampler, O: KernelOp>(&mut self, op: O) -> O::Out {
-        match self.opts.whole_group_end {
-            Some(_) => self.with_end::<S, WholeGroup, O>(op),
-            None => self.with_end::<S, EachPath, O>(op),
-        }
-    }
-
-    fn with_end<S: DiffuseSampler, E: PathEnd, O: KernelOp>(&mut self, op: O) -> O::Out {
-        match self.opts.integrator {
-            IntegratorKind::Path => op.run::<S, E, Implicit>(self),
-            IntegratorKind::Nee => op.run::<S, E, NextEvent>(self),
-        }
-    }
-
-    /// The specialisations of every kernel an iteration may record, for this device and
-    /// the options' group level.
-    fn specs(&self) -> Specs {
-        let d = self.device;
-        Specs {
-            traverse: traverse::spec(d, None),
-            traverse8: traverse8::spec(d, None),
-            extend: extend::spec(d, Some(self.opts.algorithm.group)),
-            shadow: trace_shadow::spec(d, None),
-            shadow8: trace_shadow8::spec(d, None),
-            compact: compact::specs(d),
-            reorder: reorder::specs(d),
-        }
-    }
-
-    /// Compiles the pipelines of every kernel the options use (driver compilation, which
-    /// the on-disk pipeline cache shortens on later runs), so that no render pays for it.
-    fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
-        &mut self,
-    ) -> Result<(), RenderError> {
-        let started = Instant::now();
-        let d = self.device;
-        let specs = self.specs();
-        let shading = self.scene.shading;
-        self.startup.shading = shading;
-        let wide = self.scene.nodes8.is_some();
-        let compact = self.opts.compact;
-        let reorder = self.opts.reorder > 0;
-        // Every stage this render uses, built (IR, WGSL or SPIR-V) and compiled by the
-        // driver on a thread of its own: `extend` takes the longest, and the others
-        // finish beside it.
-        type Build<'s> =
-            Box<dyn FnOnce() -> Result<Vec<Arc<KernelArtifact>>, RenderError> + Send + 's>;
-        let mut builds: Vec<Build<'_>> = vec![
-            Box::new(|| Ok(vec![init_paths::artifact(&init_paths::spec(d, None))?])),
-            Box::new(|| {
-                Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
-                    &specs.extend,
-                    shading,
-                ))?])
-            }),
-            Box::new(|| {
-                Ok(vec![if wide {
-                    traverse8::artifact(&specs.traverse8)?
-                } else {
-                    traverse::artifact(&specs.traverse)?
-                }])
-            }),
-        ];
-        if I::NEE {
-            builds.push(Box::new(|| {
-                Ok(vec![if wide {
-                    trace_shadow8::artifact(&specs.shadow8)?
-                } else {
-                    trace_shadow::artifact(&specs.shadow)?
-                }])
-            }));
-        }
-        if compact {
-            builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
-        }
-        if reorder {
-            builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));
-        }
-        std::thread::scope(|scope| {
-            let threads: Vec<_> = builds
-                .into_iter()
-                .map(|build| {
-                    scope.spawn(move || -> Result<(), RenderError> {
-                        for a in build()? {
-                            d.prepare(&a)?;
-                        }
-                        Ok(())
-                    })
-                })
-                .collect();
-            threads
-                .into_iter()
-                .try_for_each(|t| t.join().expect("a pipeline thread panicked"))
-        })?;
-        if reorder && self.paths.sort.is_none() {
-            self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
-        }
-        self.startup.pipelines += started.elapsed();
-        Ok(())
-    }
-
-    fn advance_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+    pub(crate) fn advance_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &mut self,
         until: Budget,
         progress: &mut dyn FnMut(f64, &RenderStats),
@@ -932,26 +458,24 @@ impl<'d> Renderer<'d> {
                     }
                 };
                 let recording = Instant::now();
-                let mut b = d.batch();
-                let mut stages = Vec::new();
+                let mut b = LabelledBatch::new(d.batch());
                 for k in 0..batch_iterations {
                     self.frame.iteration = run.stats.iterations + queued + k;
-                    run.cur = record_iteration::<S, E, I>(
-                        &mut b,
-                        &specs,
-                        &self.frame,
-                        &self.scene,
-                        p,
-                        run.cur,
-                        self.opts.compact,
-                        self.opts.reorder,
-                        &mut stages,
-                    )?;
+                    let wavefront = Wavefront {
+                        specs: &specs,
+                        frame: &self.frame,
+                        scene: &self.scene,
+                        paths: p,
+                        compaction: self.opts.compact,
+                        reorder_every: self.opts.reorder,
+                    };
+                    run.cur = wavefront.record_iteration::<S, E, I>(&mut b, run.cur)?;
                 }
-                let counters = b.read_back(&p.counters)?;
+                let LabelledBatch { mut batch, stages } = b;
+                let counters = batch.read_back(&p.counters)?;
                 let submitting = Instant::now();
                 run.stats.host.record += submitting - recording;
-                let submission = b.submit_async()?;
+                let submission = batch.submit_async()?;
                 run.stats.host.submit += submitting.elapsed();
                 run.stats.host.batches += 1;
                 in_flight.push_back(Pending {
@@ -970,6 +494,8 @@ impl<'d> Renderer<'d> {
             let completed = oldest.submission.wait()?;
             let stats = &mut run.stats;
             stats.host.wait += waiting.elapsed();
+            // Every dispatch was labelled with its stage as it was recorded.
+            debug_assert_eq!(oldest.stages.len(), completed.stats.len());
             let mut batch_time = Duration::ZERO;
             for (stage, t) in oldest.stages.iter().zip(&completed.stats) {
                 stats.kernel.add(*stage, ns(t));
@@ -1018,284 +544,6 @@ impl<'d> Renderer<'d> {
     }
 }
 
-/// An operation over the kernels of the current options (see `Renderer::with_kernels`).
-trait KernelOp {
-    type Out;
-    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out;
-}
-
-struct Advance<'a> {
-    until: Budget,
-    progress: &'a mut dyn FnMut(f64, &RenderStats),
-}
-
-impl KernelOp for Advance<'_> {
-    type Out = Result<RenderStats, RenderError>;
-    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
-        r.advance_kernels::<S, E, I>(self.until, self.progress)
-    }
-}
-
-struct Prepare;
-
-impl KernelOp for Prepare {
-    type Out = Result<(), RenderError>;
-    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
-        r.prepare_kernels::<S, E, I>()
-    }
-}
-
-/// The specialisations of every kernel an iteration may record.
-struct Specs {
-    traverse: cohort::Spec,
-    traverse8: cohort::Spec,
-    extend: cohort::Spec,
-    shadow: cohort::Spec,
-    shadow8: cohort::Spec,
-    compact: compact::Specs,
-    reorder: reorder::Specs,
-}
-
-/// Records one iteration of the wavefront loop, stage by stage (PAPER.md §3): traverse,
-/// extend, the shadow pass with next-event estimation, compaction. Labels each dispatch
-/// in `stages`; returns which `idrays` buffer holds the live rays afterwards.
-#[allow(clippy::too_many_arguments)]
-fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
-    b: &mut Batch<'_>,
-    specs: &Specs,
-    frame: &Frame,
-    scene: &GpuScene,
-    p: &Paths,
-    cur: usize,
-    compact: bool,
-    reorder: u32,
-    stages: &mut Vec<Stage>,
-) -> Result<usize, RenderError> {
-    let n = frame.slots;
-    let mut record =
-        |stage: Stage, dispatches: usize| stages.extend(std::iter::repeat_n(stage, dispatches));
-    // The traversal reads the live rays in bin order on a sorting iteration; every other
-    // kernel keeps the slot order of `idrays`.
-    let sorting = reorder > 0 && frame.iteration.is_multiple_of(reorder);
-    let traced = match p.sort.as_ref().filter(|_| sorting) {
-        Some(sort) => {
-            let buffers = sort.buffers();
-            reorder::record(
-                b,
-                &specs.reorder,
-                n,
-                &p.count,
-                &p.idrays[cur],
-                &p.state,
-                &p.ray_o,
-                &p.ray_d,
-                &buffers,
-            )?;
-            record(Stage::Reorder, reorder::DISPATCHES);
-            &sort.sorted
-        }
-        None => &p.idrays[cur],
-    };
-    // The 8-wide tree is faster (BENCHMARKS.md); the BVH2 serves trees too deep for its stack.
-    match &scene.nodes8 {
-        Some(n8) => traverse8::record(
-            b,
-            &specs.traverse8,
-            n,
-            frame,
-            &p.count,
-            traced,
-            &p.state,
-            &p.ray_o,
-            &p.ray_d,
-            n8,
-            &scene.triangles,
-            &p.hits,
-        )?,
-        None => traverse::record(
-            b,
-            &specs.traverse,
-            n,
-            frame,
-            &p.count,
-            traced,
-            &p.state,
-            &p.ray_o,
-            &p.ray_d,
-            &scene.nodes,
-            &scene.triangles,
-            &p.hits,
-        )?,
-    }
-    record(Stage::Traverse, 1);
-    extend::record::<S, E, I>(
-        b,
-        &specs.extend,
-        n,
-        scene.shading,
-        frame,
-        &p.count,
-        &p.idrays[cur],
-        &p.hits,
-        &scene.triangles,
-        &scene.shading_normals,
-        &scene.tex_coords,
-        &scene.textures,
-        &p.film_filter,
-        &scene.materials,
-        &scene.lights,
-        &scene.delta_lights,
-        &p.state,
-        &p.ray_o,
-        &p.ray_d,
-        &p.beta,
-        &p.radiance,
-        &p.accum,
-        &p.shadow_o,
-        &p.shadow_d,
-        &p.nee,
-        &p.flags,
-        &p.counters,
-    )?;
-    record(Stage::Extend, 1);
-    if I::NEE {
-        match &scene.nodes8 {
-            Some(n8) => trace_shadow8::record(
-                b,
-                &specs.shadow8,
-                n,
-                frame,
-                &p.count,
-                &p.idrays[cur],
-                &p.shadow_o,
-                &p.shadow_d,
-                &p.nee,
-                n8,
-                &scene.triangles,
-                &p.radiance,
-                &p.accum,
-            )?,
-            None => trace_shadow::record(
-                b,
-                &specs.shadow,
-                n,
-                frame,
-                &p.count,
-                &p.idrays[cur],
-                &p.shadow_o,
-                &p.shadow_d,
-                &p.nee,
-                &scene.nodes,
-                &scene.triangles,
-                &p.radiance,
-                &p.accum,
-            )?,
-        }
-        record(Stage::Shadow, 1);
-    }
-    if !compact {
-        return Ok(cur);
-    }
-    compact::record(
-        b,
-        &specs.compact,
-        n,
-        &p.count,
-        &p.flags,
-        &p.block_sums,
-        &p.total,
-        &p.idrays[cur],
-        &p.idrays[1 - cur],
-    )?;
-    record(Stage::Compact, compact::DISPATCHES);
-    Ok(1 - cur)
-}
-
-/// Ray reordering's buffers (`cohort_kernels::reorder::SortBuffers`): the grid of origin
-/// cells over the scene's bounds, each listed ray's bin, the histogram, and the live slots
-/// in bin order (what the traversal reads instead of `idrays` on a sorting iteration).
-struct SortState {
-    cells: GpuBuffer<Vec4>,
-    keys: GpuBuffer<u32>,
-    bins: GpuBuffer<u32>,
-    sorted: GpuBuffer<u32>,
-}
-
-impl SortState {
-    fn new(d: &Device, slots: u32, scene: &GpuScene) -> Result<SortState, RenderError> {
-        Ok(SortState {
-            cells: d.upload(&reorder::cells(scene.bounds[0], scene.bounds[1]))?,
-            keys: d.alloc(slots as usize)?,
-            bins: d.alloc(reorder::HISTOGRAM_LEN)?,
-            sorted: d.alloc(slots as usize)?,
-        })
-    }
-
-    fn buffers(&self) -> reorder::SortBuffers<'_> {
-        reorder::SortBuffers {
-            cells: &self.cells,
-            keys: &self.keys,
-            bins: &self.bins,
-            sorted: &self.sorted,
-        }
-    }
-}
-
-/// Checks the options that do not depend on the scene, for an image of `w` x `h`.
-fn validate(opts: &RenderOptions, w: u32, h: u32) -> Result<(), RenderError> {
-    if !(opts.rr_continue > 0.0 && opts.rr_continue <= 1.0) {
-        return Err(RenderError::Options(format!(
-            "Russian roulette continuation {} is not in (0, 1]",
-            opts.rr_continue
-        )));
-    }
-    if opts.patches_n == 0 || opts.patches_n > 1000 {
-        return Err(RenderError::Options(format!(
-            "patch count N = {} is not in 1..=1000",
-            opts.patches_n
-        )));
-    }
-    if !interleave_permutes(opts.interleave, w, h) {
-        return Err(RenderError::Options(format!(
-            "interleave factor {} must be odd and coprime with the image size {w}x{h} (so that it permutes the pixels)",
-            opts.interleave
-        )));
-    }
-    if opts.coherent_light && opts.integrator != IntegratorKind::Nee {
-        return Err(RenderError::Options(
-            "coherent light sampling needs next-event estimation (--integrator nee)".into(),
-        ));
-    }
-    if opts.light_cells == 0 || opts.light_cells > 64 {
-        return Err(RenderError::Options(format!(
-            "light strata K = {} is not in 1..=64",
-            opts.light_cells
-        )));
-    }
-    if let Budget::PathsPerPixel(p) = opts.budget {
-        if opts.shard.paths(p).is_empty() {
-            return Err(RenderError::Options(format!(
-                "shard {} of {p} paths per pixel has no path: split a budget of {p} paths into at most {p} shards",
-                opts.shard
-            )));
-        }
-    }
-    if let Some(q) = opts.whole_group_end {
-        if !(q > 0.0 && q <= 1.0) {
-            return Err(RenderError::Options(format!("whole-group end continuation {q} is not in (0, 1] (0 would cut paths short: biased)")));
-        }
-        if opts.algorithm.group == Group::Grid {
-            return Err(RenderError::Options(
-                "whole-group termination needs warp or block groups: the grid cannot vote within one dispatch (and with 2^20 paths \
-                     one of them ends at every bounce, so it would only be a group roulette; use --rr group)"
-                    .into(),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Writes the options into the frame the kernels read.
 /// The camera fields of the frame: where rays start and how they spread.
 fn apply_camera(frame: &mut Frame, camera: &Camera) {
     let f = camera.frame();
@@ -1308,6 +556,7 @@ fn apply_camera(frame: &mut Frame, camera: &Camera) {
     frame.focus_distance = f.focus_distance;
 }
 
+/// Writes the options into the frame the kernels read.
 fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
     frame.seed = opts.seed;
     (frame.first_path, frame.paths_per_pixel) = opts.path_range();
@@ -1331,20 +580,6 @@ fn slot_order(w: u32, h: u32, d: u32) -> Vec<u32> {
             ((y as u64 * d as u64 % h as u64) * w as u64 + (x as u64 * d as u64 % w as u64)) as u32
         })
         .collect()
-}
-
-/// Whether interleave factor `d` permutes the pixels of a `w` x `h` image (slot g renders
-/// pixel D * Morton(g), `slot_order`): `d` odd and coprime with both sides.
-pub fn interleave_permutes(d: u32, w: u32, h: u32) -> bool {
-    d & 1 == 1 && gcd(d, w) == 1 && gcd(d, h) == 1
-}
-
-fn gcd(a: u32, b: u32) -> u32 {
-    if b == 0 {
-        a
-    } else {
-        gcd(b, a % b)
-    }
 }
 
 #[cfg(test)]

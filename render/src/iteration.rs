@@ -1,0 +1,277 @@
+//! Recording one iteration of the wavefront loop (PAPER.md §3) into a batch, stage by
+//! stage: reorder (every `RenderOptions::reorder` iterations), traverse, extend, the
+//! shadow pass of next-event estimation, compact. Each stage is a function of the
+//! iteration's buffers ([`Wavefront`]), and labels every dispatch it records with its
+//! [`Stage`] as it records it ([`LabelledBatch`]): kernel time is summed by stage, however
+//! many dispatches a stage takes.
+
+use cohort::runtime::{Batch, GpuBuffer};
+use cohort_kernels::compact;
+use cohort_kernels::extend::extend;
+use cohort_kernels::integrator::Integrator;
+use cohort_kernels::layout::Frame;
+use cohort_kernels::path_end::PathEnd;
+use cohort_kernels::reorder;
+use cohort_kernels::sampling::DiffuseSampler;
+use cohort_kernels::traverse::{trace_shadow, traverse};
+use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+
+use crate::kernels::Specs;
+use crate::paths::Paths;
+use crate::{GpuScene, RenderError};
+
+/// The stages of one iteration, in order; every dispatch is labelled with its stage so
+/// that timings are summed by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Stage {
+    /// Sort the live rays for the traversal (every `RenderOptions::reorder` iterations).
+    Reorder,
+    /// Closest hit of every live ray.
+    Traverse,
+    /// Shade, sample lights and the next direction, end or continue paths.
+    Extend,
+    /// Occlusion of the light samples; finish the slots (next-event estimation only).
+    Shadow,
+    /// Stable partition of the live rays.
+    Compact,
+}
+
+/// A batch being recorded, with the stage of each of its dispatches, in order (zipped
+/// with the `DispatchStats` of the completed submission).
+pub(crate) struct LabelledBatch<'d> {
+    pub(crate) batch: Batch<'d>,
+    pub(crate) stages: Vec<Stage>,
+}
+
+impl<'d> LabelledBatch<'d> {
+    pub(crate) fn new(batch: Batch<'d>) -> Self {
+        LabelledBatch {
+            batch,
+            stages: Vec::new(),
+        }
+    }
+
+    /// Runs `record`, labelling every dispatch it adds to the batch with `stage`.
+    fn stage<E>(
+        &mut self,
+        stage: Stage,
+        record: impl FnOnce(&mut Batch<'d>) -> Result<(), E>,
+    ) -> Result<(), RenderError>
+    where
+        RenderError: From<E>,
+    {
+        let before = self.batch.len();
+        record(&mut self.batch)?;
+        let added = self.batch.len() - before;
+        self.stages.extend(std::iter::repeat_n(stage, added));
+        Ok(())
+    }
+}
+
+/// What the stages of one iteration read: the kernels, the frame (this iteration's), the
+/// scene, the path state, and the options that choose stages.
+pub(crate) struct Wavefront<'a> {
+    pub(crate) specs: &'a Specs,
+    pub(crate) frame: &'a Frame,
+    pub(crate) scene: &'a GpuScene,
+    pub(crate) paths: &'a Paths,
+    /// Whether the live rays are compacted after each iteration (`RenderOptions::compact`).
+    pub(crate) compaction: bool,
+    /// Sort the rays every this many iterations; 0 = never (`RenderOptions::reorder`).
+    pub(crate) reorder_every: u32,
+}
+
+impl<'a> Wavefront<'a> {
+    /// Records one iteration; `cur` is the `idrays` buffer that lists the live rays.
+    /// Returns the one that lists them afterwards (compaction writes the other).
+    pub(crate) fn record_iteration<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        cur: usize,
+    ) -> Result<usize, RenderError> {
+        let live = &self.paths.idrays[cur];
+        let traced = self.reorder(b, live)?;
+        self.traverse(b, traced)?;
+        self.extend::<S, E, I>(b, live)?;
+        if I::NEE {
+            self.shadow(b, live)?;
+        }
+        if !self.compaction {
+            return Ok(cur);
+        }
+        self.compact(b, live, &self.paths.idrays[1 - cur])?;
+        Ok(1 - cur)
+    }
+
+    /// On a sorting iteration, sorts the `live` rays by direction octant and origin cell
+    /// and returns them in bin order; otherwise returns `live`. Only the traversal reads
+    /// the sorted list: every other kernel keeps the slot order of `idrays`.
+    fn reorder(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        live: &'a GpuBuffer<u32>,
+    ) -> Result<&'a GpuBuffer<u32>, RenderError> {
+        let every = self.reorder_every;
+        let sorting = every > 0 && self.frame.iteration.is_multiple_of(every);
+        let p = self.paths;
+        let Some(sort) = p.sort.as_ref().filter(|_| sorting) else {
+            return Ok(live);
+        };
+        let buffers = sort.buffers();
+        b.stage(Stage::Reorder, |b| {
+            reorder::record(
+                b,
+                &self.specs.reorder,
+                self.frame.slots,
+                &p.count,
+                live,
+                &p.state,
+                &p.ray_o,
+                &p.ray_d,
+                &buffers,
+            )
+        })?;
+        Ok(&sort.sorted)
+    }
+
+    /// Closest hit of the rays listed in `traced`, into `hits`. The 8-wide tree is faster
+    /// (BENCHMARKS.md); the BVH2 serves trees too deep for its stack.
+    fn traverse(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        traced: &GpuBuffer<u32>,
+    ) -> Result<(), RenderError> {
+        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.frame.slots);
+        b.stage(Stage::Traverse, |b| match &s.nodes8 {
+            Some(n8) => traverse8::record(
+                b,
+                &self.specs.traverse8,
+                n,
+                f,
+                &p.count,
+                traced,
+                &p.state,
+                &p.ray_o,
+                &p.ray_d,
+                n8,
+                &s.triangles,
+                &p.hits,
+            ),
+            None => traverse::record(
+                b,
+                &self.specs.traverse,
+                n,
+                f,
+                &p.count,
+                traced,
+                &p.state,
+                &p.ray_o,
+                &p.ray_d,
+                &s.nodes,
+                &s.triangles,
+                &p.hits,
+            ),
+        })
+    }
+
+    /// Shades the hits of the `live` rays, samples lights and the next direction, and
+    /// ends or continues each path.
+    fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        live: &GpuBuffer<u32>,
+    ) -> Result<(), RenderError> {
+        let (s, p) = (self.scene, self.paths);
+        b.stage(Stage::Extend, |b| {
+            extend::record::<S, E, I>(
+                b,
+                &self.specs.extend,
+                self.frame.slots,
+                s.shading,
+                self.frame,
+                &p.count,
+                live,
+                &p.hits,
+                &s.triangles,
+                &s.shading_normals,
+                &s.tex_coords,
+                &s.textures,
+                &p.film_filter,
+                &s.materials,
+                &s.lights,
+                &s.delta_lights,
+                &p.state,
+                &p.ray_o,
+                &p.ray_d,
+                &p.beta,
+                &p.radiance,
+                &p.accum,
+                &p.shadow_o,
+                &p.shadow_d,
+                &p.nee,
+                &p.flags,
+                &p.counters,
+            )
+        })
+    }
+
+    /// Traces the shadow rays of the `live` slots and adds the unoccluded light samples.
+    fn shadow(&self, b: &mut LabelledBatch<'_>, live: &GpuBuffer<u32>) -> Result<(), RenderError> {
+        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.frame.slots);
+        b.stage(Stage::Shadow, |b| match &s.nodes8 {
+            Some(n8) => trace_shadow8::record(
+                b,
+                &self.specs.shadow8,
+                n,
+                f,
+                &p.count,
+                live,
+                &p.shadow_o,
+                &p.shadow_d,
+                &p.nee,
+                n8,
+                &s.triangles,
+                &p.radiance,
+                &p.accum,
+            ),
+            None => trace_shadow::record(
+                b,
+                &self.specs.shadow,
+                n,
+                f,
+                &p.count,
+                live,
+                &p.shadow_o,
+                &p.shadow_d,
+                &p.nee,
+                &s.nodes,
+                &s.triangles,
+                &p.radiance,
+                &p.accum,
+            ),
+        })
+    }
+
+    /// Lists the rays of `live` that go on into `out`, in order.
+    fn compact(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        live: &GpuBuffer<u32>,
+        out: &GpuBuffer<u32>,
+    ) -> Result<(), RenderError> {
+        let p = self.paths;
+        b.stage(Stage::Compact, |b| {
+            compact::record(
+                b,
+                &self.specs.compact,
+                self.frame.slots,
+                &p.count,
+                &p.flags,
+                &p.block_sums,
+                &p.total,
+                live,
+                out,
+            )
+        })
+    }
+}

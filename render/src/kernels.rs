@@ -1,0 +1,175 @@
+//! The kernels a renderer's options choose: the trampolines that turn the options into
+//! the kernels' type parameters (the diffuse strategy `S`, the path-end policy `E`, the
+//! integrator `I`), the specialisations of every kernel an iteration may record
+//! ([`Specs`]), and compiling their pipelines before any render.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use cohort::runtime::KernelArtifact;
+use cohort_kernels::compact;
+use cohort_kernels::extend::{extend, init_paths};
+use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
+use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
+use cohort_kernels::reorder;
+use cohort_kernels::sampling::{
+    CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
+};
+use cohort_kernels::traverse::{trace_shadow, traverse};
+use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+
+use crate::paths::SortState;
+use crate::{Budget, InPatch, IntegratorKind, RenderError, RenderStats, Renderer};
+
+/// An operation over the kernels of the current options (see `Renderer::with_kernels`).
+pub(crate) trait KernelOp {
+    type Out;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out;
+}
+
+pub(crate) struct Advance<'a> {
+    pub(crate) until: Budget,
+    pub(crate) progress: &'a mut dyn FnMut(f64, &RenderStats),
+}
+
+impl KernelOp for Advance<'_> {
+    type Out = Result<RenderStats, RenderError>;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
+        r.advance_kernels::<S, E, I>(self.until, self.progress)
+    }
+}
+
+pub(crate) struct Prepare;
+
+impl KernelOp for Prepare {
+    type Out = Result<(), RenderError>;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self, r: &mut Renderer<'_>) -> Self::Out {
+        r.prepare_kernels::<S, E, I>()
+    }
+}
+
+/// The specialisations of every kernel an iteration may record.
+pub(crate) struct Specs {
+    pub(crate) traverse: cohort::Spec,
+    pub(crate) traverse8: cohort::Spec,
+    pub(crate) extend: cohort::Spec,
+    pub(crate) shadow: cohort::Spec,
+    pub(crate) shadow8: cohort::Spec,
+    pub(crate) compact: compact::Specs,
+    pub(crate) reorder: reorder::Specs,
+}
+
+impl Renderer<'_> {
+    /// Runs `op` with the kernel types of the current options: the diffuse strategy `S`,
+    /// the path-end policy `E` and the integrator `I` are chosen here, once, from the
+    /// options, for every operation that needs them.
+    pub(crate) fn with_kernels<O: KernelOp>(&mut self, op: O) -> O::Out {
+        match (self.opts.algorithm.coherent, self.opts.in_patch) {
+            (false, _) => self.with_sampler::<Cosine, O>(op),
+            (true, InPatch::Uniform) => self.with_sampler::<CoherentUniform, O>(op),
+            (true, InPatch::Cosine) => self.with_sampler::<CoherentCosine, O>(op),
+            (true, InPatch::EqualArea) => self.with_sampler::<CoherentEqualArea, O>(op),
+        }
+    }
+
+    pub(crate) fn with_sampler<S: DiffuseSampler, O: KernelOp>(&mut self, op: O) -> O::Out {
+        match self.opts.whole_group_end {
+            Some(_) => self.with_end::<S, WholeGroup, O>(op),
+            None => self.with_end::<S, EachPath, O>(op),
+        }
+    }
+
+    fn with_end<S: DiffuseSampler, E: PathEnd, O: KernelOp>(&mut self, op: O) -> O::Out {
+        match self.opts.integrator {
+            IntegratorKind::Path => op.run::<S, E, Implicit>(self),
+            IntegratorKind::Nee => op.run::<S, E, NextEvent>(self),
+        }
+    }
+
+    /// The specialisations of every kernel an iteration may record, for this device and
+    /// the options' group level.
+    pub(crate) fn specs(&self) -> Specs {
+        let d = self.device;
+        Specs {
+            traverse: traverse::spec(d, None),
+            traverse8: traverse8::spec(d, None),
+            extend: extend::spec(d, Some(self.opts.algorithm.group)),
+            shadow: trace_shadow::spec(d, None),
+            shadow8: trace_shadow8::spec(d, None),
+            compact: compact::specs(d),
+            reorder: reorder::specs(d),
+        }
+    }
+
+    /// Compiles the pipelines of every kernel the options use (driver compilation, which
+    /// the on-disk pipeline cache shortens on later runs), so that no render pays for it.
+    pub(crate) fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+        &mut self,
+    ) -> Result<(), RenderError> {
+        let started = Instant::now();
+        let d = self.device;
+        let specs = self.specs();
+        let shading = self.scene.shading;
+        self.startup.shading = shading;
+        let wide = self.scene.nodes8.is_some();
+        let compact = self.opts.compact;
+        let reorder = self.opts.reorder > 0;
+        // Every stage this render uses, built (IR, WGSL or SPIR-V) and compiled by the
+        // driver on a thread of its own: `extend` takes the longest, and the others
+        // finish beside it.
+        type Build<'s> =
+            Box<dyn FnOnce() -> Result<Vec<Arc<KernelArtifact>>, RenderError> + Send + 's>;
+        let mut builds: Vec<Build<'_>> = vec![
+            Box::new(|| Ok(vec![init_paths::artifact(&init_paths::spec(d, None))?])),
+            Box::new(|| {
+                Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
+                    &specs.extend,
+                    shading,
+                ))?])
+            }),
+            Box::new(|| {
+                Ok(vec![if wide {
+                    traverse8::artifact(&specs.traverse8)?
+                } else {
+                    traverse::artifact(&specs.traverse)?
+                }])
+            }),
+        ];
+        if I::NEE {
+            builds.push(Box::new(|| {
+                Ok(vec![if wide {
+                    trace_shadow8::artifact(&specs.shadow8)?
+                } else {
+                    trace_shadow::artifact(&specs.shadow)?
+                }])
+            }));
+        }
+        if compact {
+            builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
+        }
+        if reorder {
+            builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));
+        }
+        std::thread::scope(|scope| {
+            let threads: Vec<_> = builds
+                .into_iter()
+                .map(|build| {
+                    scope.spawn(move || -> Result<(), RenderError> {
+                        for a in build()? {
+                            d.prepare(&a)?;
+                        }
+                        Ok(())
+                    })
+                })
+                .collect();
+            threads
+                .into_iter()
+                .try_for_each(|t| t.join().expect("a pipeline thread panicked"))
+        })?;
+        if reorder && self.paths.sort.is_none() {
+            self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
+        }
+        self.startup.pipelines += started.elapsed();
+        Ok(())
+    }
+}

@@ -1,0 +1,88 @@
+//! What a render reports: kernel time by stage, host time, paths and rays
+//! ([`RenderStats`]), and where the time before the first iteration went ([`Startup`]).
+
+use std::time::Duration;
+
+use crate::iteration::Stage;
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KernelTimes {
+    pub traverse: Duration,
+    pub extend: Duration,
+    /// The shadow pass of next-event estimation.
+    pub shadow: Duration,
+    pub compact: Duration,
+    /// Sorting the rays before the traversal (`RenderOptions::reorder`).
+    pub reorder: Duration,
+}
+impl KernelTimes {
+    pub fn total(&self) -> Duration {
+        self.traverse + self.extend + self.shadow + self.compact + self.reorder
+    }
+    /// Adds `t` to the time of `stage`.
+    pub(crate) fn add(&mut self, stage: Stage, t: Duration) {
+        match stage {
+            Stage::Traverse => self.traverse += t,
+            Stage::Extend => self.extend += t,
+            Stage::Shadow => self.shadow += t,
+            Stage::Compact => self.compact += t,
+            Stage::Reorder => self.reorder += t,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub iterations: u32,
+    pub completed_paths: u64,
+    /// Rays traversed (live rays summed over iterations).
+    pub rays: u64,
+    pub kernel: KernelTimes,
+    pub wall: Duration,
+    pub pixels: u64,
+    /// Ray slots of the wavefront: paths in flight at once (`RenderOptions::wavefront`).
+    pub slots: u64,
+    /// Where the host's time went: recording batches, submitting them, and waiting for
+    /// the oldest one in flight (the GPU is busy then; recording while it is idle is
+    /// what makes the wall time exceed the kernel time).
+    pub host: HostTimes,
+}
+
+/// Host time of a render, by stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HostTimes {
+    /// Batches submitted.
+    pub batches: u32,
+    pub record: Duration,
+    pub submit: Duration,
+    pub wait: Duration,
+}
+
+impl RenderStats {
+    pub fn paths_per_pixel(&self) -> f64 {
+        self.completed_paths as f64 / self.pixels.max(1) as f64
+    }
+    /// Completed paths per second of kernel time.
+    pub fn paths_per_second(&self) -> f64 {
+        self.completed_paths as f64 / self.kernel.total().as_secs_f64().max(1e-12)
+    }
+    /// Rays per second of traversal kernel time.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.kernel.traverse.as_secs_f64().max(1e-12)
+    }
+}
+
+/// Where the time before the first iteration went (the scene's share is measured by
+/// `GpuScene::prepare`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Startup {
+    /// BVH build (binary and 8-wide) on the host.
+    pub bvh_build: Duration,
+    /// Uploading the scene and allocating the path state.
+    pub upload: Duration,
+    /// Pipeline creation of the kernels the options use (prepared before any render).
+    pub pipelines: Duration,
+    /// What `extend` was built for: the scene's BSDF kinds and shading features
+    /// (`cohort_kernels::shading`, whose `label` names them).
+    pub shading: u32,
+}
