@@ -13,11 +13,11 @@ export COHORT_VK_VALIDATION=0
 nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv
 run() { # bin scene size paths
   local start end
-  start=$(date +%s.%N)
+  start=$EPOCHREALTIME
   "$B/$1" render --backend vulkan --scene "$2" --width "$3" --height "$3" --paths "$4" \
     --out "$OUT/r.exr" --png "$OUT/r.png" 2>&1 | grep -E "^startup|^wall"
-  end=$(date +%s.%N)
-  echo "process $(echo "$end - $start" | bc) s"
+  end=$EPOCHREALTIME
+  awk -v a="$start" -v b="$end" 'BEGIN { printf "process %.3f s\n", b - a }'
 }
 for bin in cohort-base cohort; do run $bin stanford 512 16 > /dev/null; run $bin cornell 256 32 > /dev/null; done
 for r in $(seq "$ROUNDS"); do
