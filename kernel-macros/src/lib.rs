@@ -6,7 +6,8 @@
 //! `::cohort::ir` when it runs. The original function is kept for the host, with integer
 //! arithmetic routed through `::cohort::host::ops` (`host.rs`) so that it wraps and divides
 //! as the GPU does in every build profile. This
-//! crate never builds naga IR or shader text itself: see ARCHITECTURE.md's macro trap.
+//! crate never builds naga IR or shader text itself: a proc macro runs in the compiler, where
+//! the kernel's types and the device are unknown, so the IR is built when `build` runs.
 
 use proc_macro::TokenStream;
 

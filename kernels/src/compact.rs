@@ -1,4 +1,4 @@
-//! Stream compaction (PAPER.md §3 kernel 2): a stable partition of `idrays` with the
+//! Stream compaction (the paper's §3, kernel 2): a stable partition of `idrays` with the
 //! extended rays (flag 1) first and the regenerated ones (flag 0) after them, both in
 //! their original order. `count[0]` is the number of rays and `total[0]` receives the
 //! number of extended ones. Correct for any size and any subgroup width.

@@ -1,4 +1,4 @@
-//! The paper's fourth kernel (PAPER.md §3): `display` turns the accumulation buffer into
+//! The paper's fourth kernel (§3): `display` turns the accumulation buffer into
 //! the image a window presents, every iteration, on the device that rendered it.
 //!
 //! Tone mapping is `cohort render`'s PNG (`cohort_render::output::write_png`): exposure

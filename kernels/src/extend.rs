@@ -1,4 +1,4 @@
-//! Path extension (PAPER.md §3 kernel 1) and camera-ray generation.
+//! Path extension (the paper's §3, kernel 1) and camera-ray generation.
 //!
 //! For each live ray: add the emission it reached (implicit path tracing: a path
 //! contributes when it hits an emitter or leaves the scene), then either continue the

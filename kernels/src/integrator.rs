@@ -10,7 +10,7 @@ pub trait Integrator: 'static {
     const NEE: bool;
 }
 
-/// Implicit path tracing (PAPER.md §3): `--integrator path`.
+/// Implicit path tracing (the paper's §3): `--integrator path`.
 pub struct Implicit;
 impl Integrator for Implicit {
     const NEE: bool = false;

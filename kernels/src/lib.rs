@@ -1,4 +1,4 @@
-//! The wavefront path tracer's kernels (PAPER.md §3), written in the Cohort language so
+//! The wavefront path tracer's kernels (the paper's §3), written in the Cohort language so
 //! that each is one Rust source that also runs on the host.
 //!
 //! Data flow of one iteration (driven by the `cohort-render` crate):

@@ -2,7 +2,7 @@
 //! generic over it, and the choice is made when the kernel is built (an associated
 //! constant), so grid-level kernels, which cannot vote, never contain the vote.
 //!
-//! Whole-group termination (PAPER.md §5: "terminating the whole group whenever one ray
+//! Whole-group termination (the paper's §5: "terminating the whole group whenever one ray
 //! must terminate") ending the other paths outright would truncate them, which is
 //! biased. Here it is a Russian roulette that the ending path triggers: when any path of
 //! the group ends (escapes, is absorbed, loses its own roulette or reaches the depth

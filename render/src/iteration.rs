@@ -1,4 +1,4 @@
-//! Recording one iteration of the wavefront loop (PAPER.md §3) into a batch, stage by
+//! Recording one iteration of the wavefront loop (the paper's §3) into a batch, stage by
 //! stage: reorder (every `RenderOptions::reorder` iterations), traverse, extend, the
 //! shadow pass of next-event estimation, compact. Each stage is a function of the
 //! iteration's buffers ([`Wavefront`]), and labels every dispatch it records with its

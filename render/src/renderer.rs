@@ -1,4 +1,4 @@
-//! The iteration loop of the wavefront path tracer (PAPER.md §3): per iteration one
+//! The iteration loop of the wavefront path tracer (the paper's §3): per iteration one
 //! batch `traverse8` (or `traverse`) → `extend::<S, E>` → `compact_*`, until the budget
 //! (completed paths per pixel, or accumulated GPU time of those kernels, as in the
 //! paper) is spent.

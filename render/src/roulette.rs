@@ -6,7 +6,7 @@ use cohort_scenes::Scene;
 /// A Russian roulette rule (`RenderOptions::roulette`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Roulette {
-    /// The paper's (PAPER.md §3): after every bounce a path continues with the fixed
+    /// The paper's (§3): after every bounce a path continues with the fixed
     /// probability `RenderOptions::rr_continue` (0.8), whatever its throughput.
     #[default]
     Fixed,

@@ -122,9 +122,9 @@ fn gpu_traversal_matches_host() {
                     })
                     .count();
                 // lavapipe (llvmpipe) mistraces a few rays of any loop that wraps the traversal
-                // (also with a per-invocation atomic counter; TOOLCHAIN.md records the same
-                // symptom, cause unknown): there, bound the damage and say so; everywhere else
-                // the persistent kernel must agree exactly.
+                // (also with a per-invocation atomic counter; the same symptom is known from
+                // other kernels on that driver, cause unknown): there, bound the damage and say
+                // so; everywhere else the persistent kernel must agree exactly.
                 if d.info().adapter_name.contains("llvmpipe") {
                     assert!(
                         differ * 100 <= n as usize,

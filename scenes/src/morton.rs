@@ -1,5 +1,5 @@
 //! Morton (Z-order) codes of pixels. The renderer stores its rays in the Morton order of their
-//! pixels (PAPER.md §3) so that neighbouring threads trace neighbouring primary rays; thread `g`
+//! pixels (the paper's §3) so that neighbouring threads trace neighbouring primary rays; thread `g`
 //! starts on pixel `morton2d_decode(g)`.
 
 /// Spreads the low 16 bits of `v` to the even bit positions.

@@ -82,7 +82,7 @@ pub struct Object {
 /// Integrator settings read from the scene (Mitsuba `path`, or the `path` nested in `aov` /
 /// `moment`). The renderer honours `max_depth` and `hide_emitters` always, and `rr_depth` when
 /// asked for Mitsuba's throughput-based roulette (`cohort_render::Roulette::Mitsuba`); the
-/// paper's configurations keep their fixed continuation probability (PAPER.md).
+/// paper's configurations keep their fixed continuation probability (the paper).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Integrator {
     /// Longest path, in vertices after the camera (1: only emitters seen directly; 0: nothing);

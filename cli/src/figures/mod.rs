@@ -1,4 +1,4 @@
-//! `cohort figures`: the paper's experiments (PAPER.md §4) as one sweep. For every scene
+//! `cohort figures`: the paper's experiments (§4) as one sweep. For every scene
 //! it renders (or reuses) a long `normal` reference, then every configuration × every N
 //! × the three columns of Fig. 4/5 (per-path RR with compaction, group RR `_rr` with
 //! compaction, `_rr (NO)` without), and the same again with interleaved sampling for

@@ -1,4 +1,4 @@
-//! `cohort view`: the paper's interactive renderer (PAPER.md §3, its fourth kernel
+//! `cohort view`: the paper's interactive renderer (§3, its fourth kernel
 //! `display`). A render thread advances the wavefront loop and runs `display` on the
 //! device; the window presents the latest frame, moves the camera (accumulation restarts,
 //! as in the paper), switches the configuration live, and with `--compare` shows two

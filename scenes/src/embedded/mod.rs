@@ -1,4 +1,4 @@
-//! Scenes generated in code, no files: stand-ins for the paper's four test scenes (PAPER.md §4) and
+//! Scenes generated in code, no files: stand-ins for the paper's four test scenes (§4) and
 //! the classic Cornell box, built from [`crate::shapes`] through the same [`SceneBuilder`] as file
 //! scenes, so they flow into the BVH and the renderer exactly like loaded ones.
 //!
