@@ -70,7 +70,6 @@ fn validate<T: GpuType>() -> Vec<(String, u32)> {
 #[test]
 fn every_layout_type_is_a_valid_gpu_struct() {
     validate::<BvhNode>();
-    validate::<Triangle>();
     validate::<WideNode>();
     validate::<CwNode>();
     validate::<Principled>();

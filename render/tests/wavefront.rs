@@ -59,7 +59,6 @@ fn copies_change_only_the_order_of_sums() {
         assert_eq!(one.paths, three.paths);
         let rel = largest_relative(&one, &three);
         assert!(rel < 1e-5, "{integrator:?}: {rel}");
-        assert!(one.pixels != three.pixels || rel == 0.0);
     }
 }
 
