@@ -7,6 +7,7 @@
 //! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
+use crate::bsdf::{bsdf_eval, bsdf_light_sampled, bsdf_sample, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::integrator::Integrator;
 use crate::layout::*;
@@ -17,13 +18,10 @@ use crate::light::{
 use crate::path_end::PathEnd;
 use crate::perturb::{perturb_normal, perturb_weight};
 use crate::rng::{hash, stream, uniform};
-use crate::sampling::{
-    cell_point, fresnel_conductor, fresnel_dielectric, microfacet_eval, microfacet_sample,
-    plastic_base, plastic_specular_probability, DiffuseSampler,
-};
+use crate::sampling::{cell_point, DiffuseSampler};
 use crate::scatter::{
-    blend_eval, blend_traits, blend_weight, scatter_eval, BLEND_LEVELS, BLEND_NONE,
-    BLEND_NOT_PLAIN, BLEND_READS_UV,
+    blend_eval, blend_traits, blend_weight, BLEND_LEVELS, BLEND_NONE, BLEND_NOT_PLAIN,
+    BLEND_READS_UV,
 };
 use crate::shading::*;
 use crate::texture::{hit_uv, luminance, texture_at_hit};
@@ -511,38 +509,15 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     opacity = opacity.clamp(0.0, 1.0);
                 }
                 let masked_through = opacity < 1.0 && uniform(key, 9) >= opacity;
-                let diffuse = shading & SHADES_DIFFUSE != 0
-                    && m.kind == DIFFUSE
-                    && (front || two_sided)
-                    && albedo.max_element() > 0.0;
-                // Conductors are one-sided, as in Mitsuba: the back absorbs.
-                let glossy = shading & SHADES_ROUGH_CONDUCTOR != 0
-                    && m.kind == ROUGH_CONDUCTOR
-                    && (front || two_sided);
-                let plastic =
-                    shading & SHADES_PLASTIC != 0 && m.kind == PLASTIC && (front || two_sided);
-                let rough_plastic = shading & SHADES_ROUGH_PLASTIC != 0
-                    && m.kind == ROUGH_PLASTIC
-                    && (front || two_sided);
-                let rough_dielectric =
-                    shading & SHADES_ROUGH_DIELECTRIC != 0 && m.kind == ROUGH_DIELECTRIC;
-                // Mitsuba `principled` / `principledthin`: both sides scatter (the back
-                // as Mitsuba's BSDF does there, or as the front under `twosided`).
-                let principled = shading & SHADES_PRINCIPLED != 0
-                    && (m.kind == PRINCIPLED || m.kind == PRINCIPLED_THIN);
-                // The rough dielectric's index ratio across the interface, far side over near.
-                let eta_rd = if front { m.param } else { 1.0 / m.param };
+                // Light sampling applies where the material's BSDF has a non-delta lobe
+                // that scatters from this side (`crate::bsdf`).
+                let at = hit(m, t, h, albedo, uv, d, n, ng, front);
+                let light_sampled = bsdf_light_sampled(shading, textures, at);
                 // Light sampling at non-delta vertices, if the depth limit allows one
                 // more vertex (Mitsuba: an emitter sample makes the path one longer).
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
-                    if (diffuse
-                        || glossy
-                        || plastic
-                        || rough_plastic
-                        || rough_dielectric
-                        || principled
-                        || mixture)
+                    if (light_sampled || mixture)
                         && room
                         && !pass_through
                         && (f.light_count > 0 || f.env_light > 0.0)
@@ -615,10 +590,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                     wi, n, ng, front, BLEND_NONE,
                                 )
                             } else {
-                                scatter_eval(
-                                    shading, textures, tex_coords, m, albedo, t, h, uv, d, wi, n,
-                                    ng, front,
-                                )
+                                bsdf_eval(shading, textures, tex_coords, at, wi)
                             };
                             let fc = e.truncate();
                             let pdf_b = e.w;
@@ -676,179 +648,35 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     // in full (bsdf_pdf 0, as after a delta bounce).
                     new_d = d;
                     alive = true;
-                } else if diffuse {
-                    let s = S::sample(n, u, shared_patch, f.patches_n);
-                    new_d = s.truncate();
-                    thr = thr * albedo * s.w;
-                    alive = true;
-                    // MIS weights use the cosine density whatever strategy S drew the
-                    // direction: every strategy covers the whole hemisphere (over the
-                    // group's random patch), so any weights that sum to one stay unbiased.
-                    let c = new_d.dot(n).max(0.0);
-                    bsdf_pdf = c * core::f32::consts::FRAC_1_PI;
-                    env_pdf = environment_pdf(shading, f, textures, n, new_d);
-                } else if plastic {
-                    // Mitsuba `plastic`: the coating's specular reflection or the base's
-                    // diffuse scattering, chosen by their Fresnel-weighted mean albedos.
-                    let cos_i = -d.dot(n);
-                    let f_i = fresnel_dielectric(cos_i, m.param);
-                    let p_spec = plastic_specular_probability(f_i, albedo, m.transmittance);
-                    if uniform(key, 4) < p_spec {
-                        new_d = d + n * (2.0 * cos_i);
-                        thr = thr * m.transmittance * (f_i / p_spec);
-                        delta_p = p_spec;
-                    } else {
-                        let s = S::sample(n, u, shared_patch, f.patches_n);
-                        new_d = s.truncate();
-                        let c = new_d.dot(n).max(0.0);
-                        let f_o = fresnel_dielectric(c, m.param);
-                        let base = plastic_base(albedo, m.param, m.flags & NONLINEAR != 0);
-                        thr = thr * base * ((1.0 - f_i) * (1.0 - f_o) / (1.0 - p_spec) * s.w);
-                        // As for diffuse bounces: cosine densities whatever S drew.
-                        bsdf_pdf = (1.0 - p_spec) * c * core::f32::consts::FRAC_1_PI;
-                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
-                    }
-                    alive = true;
-                } else if rough_plastic {
-                    // Mitsuba `roughplastic`: the coating's glossy reflection or the base,
-                    // chosen by their shares; each weighted by its own lobe over the
-                    // probability of choosing it (unbiased without the other lobe's
-                    // density); the mixture's density serves MIS.
-                    let fr = crate::sampling::frame(n);
-                    let wo = fr.transpose() * -d;
-                    let t_i = crate::rough_plastic::transmittance(textures, m, wo.z);
-                    let ps = crate::rough_plastic::specular_probability(t_i, albedo, m);
-                    let wi: Vec3;
-                    let mut weight = Vec3::ZERO;
-                    if uniform(key, 4) < ps {
-                        let beckmann = m.flags & BECKMANN != 0;
-                        let mn = microfacet_sample(wo, m.conductor_k.x, beckmann, u);
-                        wi = mn * (2.0 * wo.dot(mn)) - wo;
-                        let e = microfacet_eval(wo, wi, m.conductor_k.x, beckmann);
-                        if wi.z > 0.0 && e.y > 0.0 {
-                            let fresnel = fresnel_dielectric(e.z, m.param);
-                            weight = m.transmittance * (fresnel * e.x / (e.y * ps));
-                        }
-                    } else {
-                        let s = S::sample(n, u, shared_patch, f.patches_n);
-                        wi = fr.transpose() * s.truncate();
-                        if wi.z > 0.0 {
-                            let t_o = crate::rough_plastic::transmittance(textures, m, wi.z);
-                            weight = crate::rough_plastic::base(albedo, m)
-                                * (t_i * t_o * s.w / (1.0 - ps));
-                        }
-                    }
-                    if weight.max_element() > 0.0 {
-                        let t_o = crate::rough_plastic::transmittance(textures, m, wi.z);
-                        let e = crate::rough_plastic::eval(wo, wi, m, albedo, t_i, t_o);
-                        new_d = fr * wi;
-                        thr = thr * weight;
-                        alive = true;
-                        bsdf_pdf = e.w;
-                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
-                    }
-                } else if shading & SHADES_CONDUCTOR != 0
-                    && m.kind == CONDUCTOR
-                    && (front || two_sided)
-                {
-                    let cos_i = -d.dot(n);
-                    new_d = d + n * (2.0 * cos_i);
-                    thr = thr * albedo * fresnel_conductor(cos_i, m.transmittance, m.conductor_k);
-                    alive = true;
-                    delta_p = 1.0;
-                } else if glossy {
-                    let fr = crate::rough_conductor::frame(m, tex_coords, t, ng, n, front);
-                    let a = crate::rough_conductor::alpha(textures, m, uv, t.original, h);
-                    let wo = fr.transpose() * -d;
-                    // VNDF sampling maps the unit square onto the visible normals preserving
-                    // measure, so a shared cell of the square keeps each ray's pdf unchanged.
-                    let mut ug = u;
+                } else {
+                    // The material's BSDF draws the next direction (`crate::bsdf`).
+                    let mut u_glossy = u;
                     if f.coherent_glossy != 0 {
-                        ug = cell_point(shared_cell % (f.patches_n * f.patches_n), f.patches_n, u);
+                        let cell = shared_cell % (f.patches_n * f.patches_n);
+                        u_glossy = cell_point(cell, f.patches_n, u);
                     }
-                    let beckmann = m.flags & BECKMANN != 0;
-                    let mn = crate::microfacet::visible_sample(wo, a, beckmann, ug);
-                    let wi = mn * (2.0 * wo.dot(mn)) - wo;
-                    let e = crate::microfacet::conductor_eval(wo, wi, a, beckmann);
-                    if wi.z > 0.0 && e.y > 0.0 {
-                        new_d = fr * wi;
-                        let fresnel = fresnel_conductor(e.z, m.transmittance, m.conductor_k);
-                        thr = thr * albedo * fresnel * (e.x / e.y);
+                    let draws = Draws {
+                        u,
+                        u_glossy,
+                        choice: uniform(key, 4),
+                        group_value: shared_patch,
+                        patches_n: f.patches_n,
+                        pad: 0,
+                    };
+                    let s = bsdf_sample::<S>(shading, textures, tex_coords, at, thr, draws);
+                    if s.alive != 0 {
+                        new_d = s.dir;
+                        thr = s.beta;
+                        eta2 *= s.eta2;
+                        bsdf_pdf = s.pdf;
+                        delta_p = s.delta_p;
                         alive = true;
-                        bsdf_pdf = e.y;
-                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
-                    }
-                } else if principled {
-                    let fr = crate::principled::frame(m, textures, tex_coords, t, ng, n, front);
-                    let pp = crate::principled::params(textures, m, albedo, uv, t.original, h);
-                    let wi_l = fr.transpose() * -d;
-                    let wl = crate::principled::sample_kind(pp, m.kind, wi_l, u, uniform(key, 4));
-                    if wl.dot(wl) > 0.0 {
-                        let e = crate::principled::eval_kind(pp, m.kind, wi_l, wl);
-                        if e.w > 0.0 {
-                            new_d = (fr * wl).normalize();
-                            thr = thr * e.truncate() / e.w;
-                            // A refraction through `principled` (its value carries the
-                            // 1 / eta²); `principledthin` stays on its side of the index.
-                            if m.kind == PRINCIPLED && wi_l.z * wl.z < 0.0 {
-                                let eta_path = if wi_l.z > 0.0 { pp.eta } else { 1.0 / pp.eta };
-                                eta2 *= eta_path * eta_path;
-                            }
-                            alive = true;
-                            bsdf_pdf = e.w;
+                        // The environment's light-sampling density of a direction MIS
+                        // weighs (one a delta lobe drew is counted in full).
+                        if s.pdf > 0.0 {
                             env_pdf = environment_pdf(shading, f, textures, n, new_d);
                         }
                     }
-                } else if rough_dielectric {
-                    // Mitsuba `roughdielectric`: a microfacet normal seen from the ray's side,
-                    // then reflection with the Fresnel probability, else refraction. MIS
-                    // weighs what it then meets against light sampling at this vertex.
-                    let beckmann = m.flags & BECKMANN != 0;
-                    let a = crate::rough_dielectric::alpha(textures, m, uv, t.original, h);
-                    let fr = crate::rough_dielectric::frame(m, tex_coords, t, ng, n, front);
-                    let s = crate::rough_dielectric::sample(
-                        -d,
-                        fr,
-                        eta_rd,
-                        a,
-                        beckmann,
-                        u,
-                        uniform(key, 4),
-                    );
-                    if s.w > 0.0 {
-                        new_d = s.truncate();
-                        // The weight carries a refraction's 1 / eta²
-                        // (`rough_dielectric::sample`).
-                        let mut tint = m.color;
-                        if new_d.dot(n) <= 0.0 {
-                            tint = m.transmittance;
-                            eta2 *= eta_rd * eta_rd;
-                        }
-                        thr = thr * tint * s.w;
-                        alive = true;
-                        let e = crate::rough_dielectric::eval(-d, new_d, fr, eta_rd, a, beckmann);
-                        bsdf_pdf = e.y;
-                        env_pdf = environment_pdf(shading, f, textures, n, new_d);
-                    }
-                } else if shading & SHADES_DIELECTRIC != 0 && m.kind == DIELECTRIC {
-                    // Dielectric: `param` is int_ior / ext_ior; entering through the front face.
-                    let eta = if front { m.param } else { 1.0 / m.param };
-                    let cos_i = -d.dot(n);
-                    let fr = fresnel_dielectric(cos_i, eta);
-                    if uniform(key, 4) < fr {
-                        new_d = d + n * (2.0 * cos_i);
-                        thr = thr * m.color;
-                        delta_p = fr;
-                    } else {
-                        let inv = 1.0 / eta;
-                        let cos_t = (1.0 - inv * inv * (1.0 - cos_i * cos_i)).max(0.0).sqrt();
-                        new_d = (d * inv + n * (inv * cos_i - cos_t)).normalize();
-                        // Mitsuba's radiance scale of a refraction.
-                        thr = thr * m.transmittance * (inv * inv);
-                        eta2 *= eta * eta;
-                        delta_p = 1.0 - fr;
-                    }
-                    alive = true;
                 }
                 // A delta direction drawn in a blend takes Mitsuba's weight: the drawing
                 // BSDF's delta value and lobe probability, the other BSDFs' value and

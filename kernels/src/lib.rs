@@ -18,6 +18,7 @@
 // kernel is built and cannot be merged into a condition on GPU values.
 #![allow(clippy::too_many_arguments, clippy::collapsible_if)]
 
+pub mod bsdf;
 pub mod compact;
 pub mod copy;
 pub mod display;
@@ -29,12 +30,8 @@ pub mod light;
 pub mod microfacet;
 pub mod path_end;
 pub mod perturb;
-pub mod principled;
 pub mod reorder;
 pub mod rng;
-pub mod rough_conductor;
-pub mod rough_dielectric;
-pub mod rough_plastic;
 pub mod sampling;
 pub mod scatter;
 pub mod shading;

@@ -10,33 +10,12 @@
 
 use crate::layout::*;
 
-/// The material kinds, in `Material::kind` order, and their names in labels and
-/// `--stats` (Mitsuba's plugin names).
-pub const KINDS: [(u32, &str); 9] = [
-    (DIFFUSE, "diffuse"),
-    (CONDUCTOR, "conductor"),
-    (ROUGH_CONDUCTOR, "roughconductor"),
-    (DIELECTRIC, "dielectric"),
-    (PLASTIC, "plastic"),
-    (ROUGH_PLASTIC, "roughplastic"),
-    (ROUGH_DIELECTRIC, "roughdielectric"),
-    (PRINCIPLED, "principled"),
-    (PRINCIPLED_THIN, "principledthin"),
-];
+pub use crate::bsdf::KINDS;
 
 /// The bit of material kind `kind` (one of [`KINDS`]).
 pub const fn kind_bit(kind: u32) -> u32 {
     1 << kind
 }
-
-pub const SHADES_DIFFUSE: u32 = kind_bit(DIFFUSE);
-pub const SHADES_CONDUCTOR: u32 = kind_bit(CONDUCTOR);
-pub const SHADES_ROUGH_CONDUCTOR: u32 = kind_bit(ROUGH_CONDUCTOR);
-pub const SHADES_DIELECTRIC: u32 = kind_bit(DIELECTRIC);
-pub const SHADES_PLASTIC: u32 = kind_bit(PLASTIC);
-pub const SHADES_ROUGH_PLASTIC: u32 = kind_bit(ROUGH_PLASTIC);
-pub const SHADES_ROUGH_DIELECTRIC: u32 = kind_bit(ROUGH_DIELECTRIC);
-pub const SHADES_PRINCIPLED: u32 = kind_bit(PRINCIPLED) | kind_bit(PRINCIPLED_THIN);
 
 /// Some material is a `blendbsdf` (`Material::blend`).
 pub const SHADES_BLEND: u32 = 1 << 16;

@@ -164,7 +164,7 @@ pub fn bsdf_eval_reported(p: &BsdfParams, pr: Principled, wi: Vec3) -> Vec2 {
         let e = crate::microfacet::conductor_eval(wo, wi, p.alpha, beckmann);
         r = Vec2::new(e.x, e.y);
     } else if p.kind == VALIDATE_DIELECTRIC {
-        let e = crate::rough_dielectric::eval(
+        let e = crate::bsdf::rough_dielectric::eval(
             wo,
             wi,
             Mat3::from_cols(Vec3::X, Vec3::Y, Vec3::Z),
@@ -191,7 +191,7 @@ pub fn bsdf_eval_reported(p: &BsdfParams, pr: Principled, wi: Vec3) -> Vec2 {
         } else {
             PRINCIPLED
         };
-        let e = crate::principled::eval_kind(pr, kind, wo, wi);
+        let e = crate::bsdf::principled::eval_kind(pr, kind, wo, wi);
         r = Vec2::new((e.x + e.y + e.z) / 3.0, e.w);
     } else if wi.z > 0.0 {
         let c = wi.z * core::f32::consts::FRAC_1_PI;
@@ -217,7 +217,7 @@ pub fn bsdf_sample(p: &BsdfParams, pr: Principled, u: Vec2, choice: f32) -> Vec4
             }
         }
     } else if p.kind == VALIDATE_DIELECTRIC {
-        r = crate::rough_dielectric::sample(
+        r = crate::bsdf::rough_dielectric::sample(
             wo,
             Mat3::from_cols(Vec3::X, Vec3::Y, Vec3::Z),
             p.eta,
@@ -252,9 +252,9 @@ pub fn bsdf_sample(p: &BsdfParams, pr: Principled, u: Vec2, choice: f32) -> Vec4
         } else {
             PRINCIPLED
         };
-        let wl = crate::principled::sample_kind(pr, kind, wo, u, choice);
+        let wl = crate::bsdf::principled::sample_kind(pr, kind, wo, u, choice);
         if wl.dot(wl) > 0.0 {
-            let e = crate::principled::eval_kind(pr, kind, wo, wl);
+            let e = crate::bsdf::principled::eval_kind(pr, kind, wo, wl);
             if e.w > 0.0 {
                 r = wl.normalize().extend((e.x + e.y + e.z) / (3.0 * e.w));
             }

@@ -2,8 +2,8 @@
 //! against Mitsuba 3.9.1's own BSDFs: values, densities and samples at random directions,
 //! recorded by `scripts/principled_cases.py` in `data/principled_mitsuba.txt`.
 
+use cohort_kernels::bsdf::principled::{eval, sample, thin_eval, thin_sample};
 use cohort_kernels::layout::Principled;
-use cohort_kernels::principled::{eval, sample, thin_eval, thin_sample};
 use glam::{Vec2, Vec3};
 
 struct Set {

@@ -3,7 +3,7 @@
 //! over the sphere of directions, for both distributions, both sides of the interface and
 //! total internal reflection, isotropic and anisotropic.
 
-use cohort_kernels::rough_dielectric::{eval, sample};
+use cohort_kernels::bsdf::rough_dielectric::{eval, sample};
 use glam::{Mat3, Vec2, Vec3};
 
 struct Rng(u32);

@@ -6,8 +6,8 @@
 // Values as Mitsuba printed them.
 #![allow(clippy::excessive_precision, clippy::approx_constant)]
 
+use cohort_kernels::bsdf::rough_plastic::{eval, transmittance};
 use cohort_kernels::layout::Material;
-use cohort_kernels::rough_plastic::{eval, transmittance};
 use glam::{Vec3, Vec4};
 
 type Case = ([f32; 3], [f32; 3], [f32; 3], f32);

@@ -87,7 +87,7 @@ pub const ROUGH_PLASTIC: u32 = 5;
 /// block where that is anisotropic or textured; `BECKMANN` flag.
 pub const ROUGH_DIELECTRIC: u32 = 6;
 /// Mitsuba `principled`: `color` base colour, `table` index + 1 of its parameter block in
-/// the texture array ([`Principled`] as `cohort_kernels::principled::params` reads it).
+/// the texture array ([`Principled`] as `cohort_kernels::bsdf::principled::params` reads it).
 pub const PRINCIPLED: u32 = 7;
 /// Mitsuba `principledthin`: as [`PRINCIPLED`].
 pub const PRINCIPLED_THIN: u32 = 8;
@@ -180,7 +180,7 @@ pub struct Material {
 }
 
 /// The parameters of a Mitsuba `principled` or `principledthin` BSDF at a hit, named as
-/// Mitsuba names them (`cohort_kernels::principled`). The sampling rates: `principled`'s
+/// Mitsuba names them (`cohort_kernels::bsdf::principled`). The sampling rates: `principled`'s
 /// main specular, clearcoat and diffuse reflectance in `rate_a`..`rate_c`;
 /// `principledthin`'s specular reflectance, specular transmittance, diffuse transmittance
 /// and diffuse reflectance in `rate_a`..`rate_d`.

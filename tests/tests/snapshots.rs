@@ -84,10 +84,11 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::display::display;
     use cohort_kernels::extend::{extend, init_paths};
     use cohort_kernels::integrator::{Implicit, NextEvent};
+    use cohort_kernels::layout::DIFFUSE;
     use cohort_kernels::path_end::{EachPath, WholeGroup};
     use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
-    use cohort_kernels::shading::{SHADES_ALL, SHADES_DIFFUSE};
+    use cohort_kernels::shading::{kind_bit, SHADES_ALL};
     use cohort_kernels::traverse::{trace_shadow, traverse};
     use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
     fn variant(
@@ -199,7 +200,7 @@ fn renderer_variants() -> Vec<variants::Variant> {
             "extend_cosine_nee_diffuse",
             &extend::INFO,
             Group::Thread,
-            &[SHADES_DIFFUSE],
+            &[kind_bit(DIFFUSE)],
             extend::build::<Cosine, EachPath, NextEvent>,
         ),
         specialized(

@@ -5,16 +5,17 @@
 //! (`crate::rough_conductor`): a number in `Material::conductor_k.x`, or a parameter block
 //! (`Material::table`) where it is anisotropic or textured.
 
+use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
 use crate::microfacet::{d, g1, visible_pdf, visible_sample};
-use crate::sampling::fresnel_dielectric;
+use crate::sampling::{fresnel_dielectric, DiffuseSampler};
 use cohort::prelude::*;
 
 /// (alpha_u, alpha_v) of rough dielectric `m` at hit `h` of triangle `original` (texture
 /// coordinates `uv`), at least 1e-4 as Mitsuba clamps them.
 #[kernel_fn]
 pub fn alpha(textures: &[Vec4], m: Material, uv: Vec2, original: u32, h: Vec4) -> Vec2 {
-    crate::rough_conductor::roughness(textures, m.conductor_k.x, m.table, uv, original, h)
+    crate::bsdf::rough_conductor::roughness(textures, m.conductor_k.x, m.table, uv, original, h)
 }
 
 /// The frame rough dielectric `m` scatters in: z the shading normal `n` on the viewer's
@@ -115,4 +116,69 @@ pub fn eval(wo: Vec3, wi: Vec3, fr: Mat3, eta: f32, a: Vec2, beckmann: bool) -> 
         }
     }
     r
+}
+
+/// The BSDF: [`sample`] and [`eval`] at the interface seen from the ray's side (the index
+/// ratio `Material::param` inverted behind), tinted by the specular reflectance
+/// (`Material::color`) or transmittance. Both sides scatter.
+pub struct RoughDielectric;
+
+#[kernel_impl]
+impl Bsdf for RoughDielectric {
+    const KINDS: u32 = 1 << ROUGH_DIELECTRIC;
+    const NON_DELTA: bool = true;
+
+    fn scatters(_at: Hit) -> bool {
+        true
+    }
+
+    fn sample<S: DiffuseSampler>(
+        textures: &[Vec4],
+        tex_coords: &[Vec4],
+        at: Hit,
+        beta: Vec3,
+        r: Draws,
+    ) -> Scattered {
+        // The index ratio across the interface, far side over near.
+        let eta = if at.front != 0 {
+            at.m.param
+        } else {
+            1.0 / at.m.param
+        };
+        let beckmann = at.m.flags & BECKMANN != 0;
+        let a = alpha(textures, at.m, at.uv, at.t.original, at.h);
+        let fr = frame(at.m, tex_coords, at.t, at.ng, at.n, at.front != 0);
+        let s = sample(-at.d, fr, eta, a, beckmann, r.u, r.choice);
+        let mut out = absorbed();
+        if s.w > 0.0 {
+            let dir = s.truncate();
+            // The weight carries a refraction's 1 / eta² (`sample`).
+            let mut tint = at.m.color;
+            let mut eta2 = 1.0f32;
+            if dir.dot(at.n) <= 0.0 {
+                tint = at.m.transmittance;
+                eta2 = eta * eta;
+            }
+            let e = eval(-at.d, dir, fr, eta, a, beckmann);
+            out = scattered(dir, e.y, beta * tint * s.w, 0.0, eta2);
+        }
+        out
+    }
+
+    fn eval(textures: &[Vec4], tex_coords: &[Vec4], at: Hit, wi: Vec3) -> Vec4 {
+        let eta = if at.front != 0 {
+            at.m.param
+        } else {
+            1.0 / at.m.param
+        };
+        let a = alpha(textures, at.m, at.uv, at.t.original, at.h);
+        let fr = frame(at.m, tex_coords, at.t, at.ng, at.n, at.front != 0);
+        let e = eval(-at.d, wi, fr, eta, a, at.m.flags & BECKMANN != 0);
+        let tint = if e.z > 0.0 {
+            at.m.color
+        } else {
+            at.m.transmittance
+        };
+        (tint * e.x).extend(e.y)
+    }
 }

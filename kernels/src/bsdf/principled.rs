@@ -13,9 +13,10 @@
 //! Transmission scales radiance by 1 / eta², as Mitsuba's radiance transport and
 //! `rough_dielectric` do.
 
+use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
 use crate::microfacet::{ggx_d, ggx_g1, visible_pdf, visible_sample};
-use crate::sampling::{concentric_disk, fresnel_dielectric};
+use crate::sampling::{concentric_disk, fresnel_dielectric, DiffuseSampler};
 use crate::texture::luminance;
 use cohort::prelude::*;
 
@@ -634,5 +635,60 @@ pub fn sample_kind(p: Principled, kind: u32, wi: Vec3, u: Vec2, choice: f32) -> 
         thin_sample(p, wi, u, choice)
     } else {
         sample(p, wi, u, choice)
+    }
+}
+
+/// The BSDF, `principled` and `principledthin` alike (they share the parameter block and
+/// the frame; [`sample_kind`] and [`eval_kind`] pick the lobes by kind). Both sides
+/// scatter (the back as Mitsuba's BSDF does there, or as the front under `twosided`).
+pub struct PrincipledBsdf;
+
+#[kernel_impl]
+impl Bsdf for PrincipledBsdf {
+    const KINDS: u32 = (1 << PRINCIPLED) | (1 << PRINCIPLED_THIN);
+    const NON_DELTA: bool = true;
+
+    fn scatters(_at: Hit) -> bool {
+        true
+    }
+
+    fn sample<S: DiffuseSampler>(
+        textures: &[Vec4],
+        tex_coords: &[Vec4],
+        at: Hit,
+        beta: Vec3,
+        r: Draws,
+    ) -> Scattered {
+        let fr = frame(at.m, textures, tex_coords, at.t, at.ng, at.n, at.front != 0);
+        let pp = params(textures, at.m, at.albedo, at.uv, at.t.original, at.h);
+        let wi_l = fr.transpose() * -at.d;
+        let wl = sample_kind(pp, at.m.kind, wi_l, r.u, r.choice);
+        let mut out = absorbed();
+        if wl.dot(wl) > 0.0 {
+            let e = eval_kind(pp, at.m.kind, wi_l, wl);
+            if e.w > 0.0 {
+                // A refraction through `principled` (its value carries the 1 / eta²);
+                // `principledthin` stays on its side of the index.
+                let mut eta2 = 1.0f32;
+                if at.m.kind == PRINCIPLED && wi_l.z * wl.z < 0.0 {
+                    let eta_path = if wi_l.z > 0.0 { pp.eta } else { 1.0 / pp.eta };
+                    eta2 = eta_path * eta_path;
+                }
+                out = scattered(
+                    (fr * wl).normalize(),
+                    e.w,
+                    beta * e.truncate() / e.w,
+                    0.0,
+                    eta2,
+                );
+            }
+        }
+        out
+    }
+
+    fn eval(textures: &[Vec4], tex_coords: &[Vec4], at: Hit, wi: Vec3) -> Vec4 {
+        let fr = frame(at.m, textures, tex_coords, at.t, at.ng, at.n, at.front != 0);
+        let pp = params(textures, at.m, at.albedo, at.uv, at.t.original, at.h);
+        eval_kind(pp, at.m.kind, fr.transpose() * -at.d, fr.transpose() * wi)
     }
 }

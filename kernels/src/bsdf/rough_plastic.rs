@@ -5,8 +5,12 @@
 //! `lerp_gather` interpolates it) and by the internal reflections the coating sends back.
 //! The table and the internal reflectance come from `cohort_scenes::rough_plastic`.
 
+use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
-use crate::sampling::{fresnel_dielectric, microfacet_eval, plastic_specular_probability};
+use crate::sampling::{
+    fresnel_dielectric, microfacet_eval, microfacet_sample, plastic_specular_probability,
+    DiffuseSampler,
+};
 use crate::texture::texture_eval;
 use cohort::prelude::*;
 
@@ -55,4 +59,64 @@ pub fn eval(wo: Vec3, wi: Vec3, m: Material, albedo: Vec3, t_i: f32, t_o: f32) -
         r = (specular + diffuse).extend(pdf);
     }
     r
+}
+
+/// The BSDF: the coating's glossy reflection or the base, chosen by their shares
+/// ([`specular_probability`]); each sample weighted by its own lobe over the probability of
+/// choosing it (unbiased without the other lobe's density), the base's directions drawn by
+/// the diffuse strategy `S`; the mixture's density serves MIS. One-sided.
+pub struct RoughPlastic;
+
+#[kernel_impl]
+impl Bsdf for RoughPlastic {
+    const KINDS: u32 = 1 << ROUGH_PLASTIC;
+    const NON_DELTA: bool = true;
+
+    fn sample<S: DiffuseSampler>(
+        textures: &[Vec4],
+        _tex_coords: &[Vec4],
+        at: Hit,
+        beta: Vec3,
+        r: Draws,
+    ) -> Scattered {
+        let fr = crate::sampling::frame(at.n);
+        let wo = fr.transpose() * -at.d;
+        let t_i = transmittance(textures, at.m, wo.z);
+        let ps = specular_probability(t_i, at.albedo, at.m);
+        let wi: Vec3;
+        let mut weight = Vec3::ZERO;
+        if r.choice < ps {
+            let beckmann = at.m.flags & BECKMANN != 0;
+            let mn = microfacet_sample(wo, at.m.conductor_k.x, beckmann, r.u);
+            wi = mn * (2.0 * wo.dot(mn)) - wo;
+            let e = microfacet_eval(wo, wi, at.m.conductor_k.x, beckmann);
+            if wi.z > 0.0 && e.y > 0.0 {
+                let fresnel = fresnel_dielectric(e.z, at.m.param);
+                weight = at.m.transmittance * (fresnel * e.x / (e.y * ps));
+            }
+        } else {
+            let s = S::sample(at.n, r.u, r.group_value, r.patches_n);
+            wi = fr.transpose() * s.truncate();
+            if wi.z > 0.0 {
+                let t_o = transmittance(textures, at.m, wi.z);
+                weight = base(at.albedo, at.m) * (t_i * t_o * s.w / (1.0 - ps));
+            }
+        }
+        let mut out = absorbed();
+        if weight.max_element() > 0.0 {
+            let t_o = transmittance(textures, at.m, wi.z);
+            let e = eval(wo, wi, at.m, at.albedo, t_i, t_o);
+            out = scattered(fr * wi, e.w, beta * weight, 0.0, 1.0);
+        }
+        out
+    }
+
+    fn eval(textures: &[Vec4], _tex_coords: &[Vec4], at: Hit, wi: Vec3) -> Vec4 {
+        let fr = crate::sampling::frame(at.n);
+        let wo = fr.transpose() * -at.d;
+        let wl = fr.transpose() * wi;
+        let t_i = transmittance(textures, at.m, wo.z);
+        let t_o = transmittance(textures, at.m, wl.z);
+        eval(wo, wl, at.m, at.albedo, t_i, t_o)
+    }
 }
