@@ -147,6 +147,18 @@ fn ir_body(
     Ok((s, tokens))
 }
 
+/// The key of a trait method's IR instances: the implementing type, and the method's own
+/// type parameters where it has some (`fn sample<S: Sampler>(..)`), so that each of its
+/// instances is its own naga function.
+fn method_key(generics: &syn::Generics) -> TokenStream {
+    let tps: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
+    if tps.is_empty() {
+        quote!(Self)
+    } else {
+        quote!((Self, #(#tps,)*))
+    }
+}
+
 fn static_where(generics: &syn::Generics) -> TokenStream {
     let tps: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
     let bounds = tps.iter().map(|t| quote!(#t: 'static));
@@ -237,14 +249,20 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
             let params = &s.params;
             let ret = &s.ret;
             let generics = &m.sig.generics;
+            let wh = static_where(generics);
             let decl = match &m.default {
                 Some(block) => {
                     let display = format!("{}_{}", trait_name, m.sig.ident);
-                    let (_, body) =
-                        ir_body(&m.sig, block, quote!(Self), &["Self".to_string()], &display)?;
-                    quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens)] fn #ir_name #generics (#(#params),*) -> #ret { #body } }
+                    let (_, body) = ir_body(
+                        &m.sig,
+                        block,
+                        method_key(generics),
+                        &["Self".to_string()],
+                        &display,
+                    )?;
+                    quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens)] fn #ir_name #generics (#(#params),*) -> #ret #wh { #body } }
                 }
-                None => quote! { #[doc(hidden)] fn #ir_name #generics (#(#params),*) -> #ret; },
+                None => quote! { #[doc(hidden)] fn #ir_name #generics (#(#params),*) -> #ret #wh; },
             };
             extra.push(syn::parse2::<syn::TraitItem>(decl)?);
         }
@@ -286,19 +304,20 @@ pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
             }
             let ir_name = format_ident!("__ir_{}", m.sig.ident);
             let display = format!("{}_{}", trait_name, m.sig.ident);
+            let generics = &m.sig.generics;
             let (s, body) = ir_body(
                 &m.sig,
                 &m.block,
-                quote!(Self),
+                method_key(generics),
                 &["Self".to_string()],
                 &display,
             )?;
             let params = &s.params;
             let ret = &s.ret;
-            let generics = &m.sig.generics;
+            let wh = static_where(generics);
             extra.push(syn::parse2::<syn::ImplItem>(quote! {
                 #[allow(unused_variables, unused_mut, unused_braces, unused_parens)]
-                fn #ir_name #generics (#(#params),*) -> #ret { #body }
+                fn #ir_name #generics (#(#params),*) -> #ret #wh { #body }
             })?);
         }
     }

@@ -41,3 +41,26 @@ pub fn apply_curve<C: Curve>(#[builtin(global_index)] i: u32, xs: &[f32], ys: &m
         ys[i] = C::scaled(xs[i]) + C::eval(1.0);
     }
 }
+
+/// A strategy whose method is generic over another strategy: each (implementing type,
+/// method type argument) pair is its own function in the kernel.
+#[kernel_trait]
+pub trait Combine {
+    fn after<C: Curve>(x: f32) -> f32;
+}
+
+pub struct Twice;
+#[kernel_impl]
+impl Combine for Twice {
+    fn after<C: Curve>(x: f32) -> f32 {
+        C::eval(C::eval(x))
+    }
+}
+
+#[kernel(workgroup = 64)]
+pub fn apply_both<K: Combine>(#[builtin(global_index)] i: u32, xs: &[f32], ys: &mut [f32]) {
+    let i = i as usize;
+    if i < xs.len() {
+        ys[i] = K::after::<Square>(xs[i]) - K::after::<Tent>(xs[i]);
+    }
+}
