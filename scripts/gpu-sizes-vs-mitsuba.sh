@@ -6,7 +6,8 @@
 # Mitsuba's 1024-spp error at 128 and 256, its 256-spp error at 512 and 1024.
 # Needs: $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
 # unpacked and trimmed to cuda_ad_rgb and the scenes' plugins, as a tar.xz of a `site`
-# folder), $SCENES/{cornell-box,stanford-like}. On the device:
+# folder), $SCENES/{cornell-box,stanford-like} (or the scene folders named in $NAMES,
+# comma-separated, e.g. NAMES=bunny-box SIZES=512 for the scanned mesh). On the device:
 #   OUT=$OUT B=gpu-pack2 SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
@@ -24,7 +25,7 @@ for size in ${SIZES:-128 256 512 1024}; do
     256) ref=32768,16384; mspp=64,128,256,512,1024,2048; cpaths=64,128,256,512,1024,2048,4096; target=1024 ;;
     *) ref=4096,2048; mspp=32,64,128,256,512; cpaths=32,64,128,256,512,1024; target=256 ;;
   esac
-  python3 scripts/equal_time.py --scenes "$SCENES" --cohort "$B/cohort" --variant cuda_ad_rgb --size $size \
+  python3 scripts/equal_time.py --scenes "$SCENES" --names "${NAMES:-cornell-box,stanford-like}" --cohort "$B/cohort" --variant cuda_ad_rgb --size $size \
     --ref-spp $ref --mitsuba-spp $mspp --cohort-paths $cpaths --target-spp $target \
     --cohort-args "--integrator nee --backend vulkan;--integrator nee --backend vulkan --wavefront 1" \
     --out "$OUT/size$size" 2>&1 | grep -vE "^\{" | tee "$OUT/size$size.log"
