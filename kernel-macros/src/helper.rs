@@ -155,7 +155,8 @@ fn method_key(generics: &syn::Generics) -> TokenStream {
     if tps.is_empty() {
         quote!(Self)
     } else {
-        quote!((Self, #(#tps,)*))
+        // `*const Self`: `Self` may be unsized in a trait's default body.
+        quote!((*const Self, #(#tps,)*))
     }
 }
 
@@ -260,9 +261,11 @@ pub fn expand_trait(mut t: syn::ItemTrait) -> syn::Result<TokenStream> {
                         &["Self".to_string()],
                         &display,
                     )?;
-                    quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens)] fn #ir_name #generics (#(#params),*) -> #ret #wh { #body } }
+                    quote! { #[doc(hidden)] #[allow(unused_variables, unused_mut, unused_braces, unused_parens, clippy::multiple_bound_locations)] fn #ir_name #generics (#(#params),*) -> #ret #wh { #body } }
                 }
-                None => quote! { #[doc(hidden)] fn #ir_name #generics (#(#params),*) -> #ret #wh; },
+                None => {
+                    quote! { #[doc(hidden)] #[allow(clippy::multiple_bound_locations)] fn #ir_name #generics (#(#params),*) -> #ret #wh; }
+                }
             };
             extra.push(syn::parse2::<syn::TraitItem>(decl)?);
         }
@@ -316,7 +319,7 @@ pub fn expand_impl(mut i: syn::ItemImpl) -> syn::Result<TokenStream> {
             let ret = &s.ret;
             let wh = static_where(generics);
             extra.push(syn::parse2::<syn::ImplItem>(quote! {
-                #[allow(unused_variables, unused_mut, unused_braces, unused_parens)]
+                #[allow(unused_variables, unused_mut, unused_braces, unused_parens, clippy::multiple_bound_locations)]
                 fn #ir_name #generics (#(#params),*) -> #ret #wh { #body }
             })?);
         }

@@ -7,7 +7,7 @@
 //! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
-use crate::bsdf::{bsdf_eval, bsdf_light_sampled, bsdf_sample, hit, Draws};
+use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::integrator::Integrator;
 use crate::layout::*;
@@ -514,7 +514,17 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let at = hit(m, t, h, albedo, uv, d, n, ng, front);
                 let light_sampled = bsdf_light_sampled(shading, textures, at);
                 // Light sampling at non-delta vertices, if the depth limit allows one
-                // more vertex (Mitsuba: an emitter sample makes the path one longer).
+                // more vertex (Mitsuba: an emitter sample makes the path one longer). The
+                // light sample: its direction, radiance and density, or a delta light's
+                // selection probability (its weight is 1 / selection: BSDF sampling never
+                // reaches it, so it has no density to weigh), and the shadow ray's reach.
+                let mut light_on = false;
+                let mut wi = Vec3::ZERO;
+                let mut le = Vec3::ZERO;
+                let mut light_pdf = 0.0f32;
+                let mut delta_select = 0.0f32;
+                let mut tmax = 3.0e38f32;
+                let o = offset_origin(p, ng_n);
                 if I::NEE {
                     let room = f.max_depth == 0 || bounce + 2 <= f.max_depth;
                     if (light_sampled || mixture)
@@ -528,14 +538,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                             ul = shared_light.x;
                             up = cell_point(shared_light.y.to_bits(), f.light_cells, up);
                         }
-                        let o = offset_origin(p, ng_n);
-                        let mut wi = Vec3::ZERO;
-                        let mut le = Vec3::ZERO;
-                        let mut light_pdf = 0.0f32;
-                        // A delta light's sample has no density to weigh against BSDF
-                        // sampling (which never reaches it): its weight is 1 / selection.
-                        let mut delta_select = 0.0f32;
-                        let mut tmax = 3.0e38f32;
                         if ul < f.env_light {
                             let s = environment_sample(shading, f, textures, n, up);
                             wi = s.truncate();
@@ -582,56 +584,84 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                                 }
                             }
                         }
-                        if light_pdf > 0.0 || delta_select > 0.0 {
-                            // f·cos and the BSDF-sampling density of `wi`.
-                            let e = if mixture {
-                                blend_eval(
-                                    shading, materials, textures, tex_coords, root, t, h, uv, d,
-                                    wi, n, ng, front, BLEND_NONE,
-                                )
-                            } else {
-                                bsdf_eval(shading, textures, tex_coords, at, wi)
-                            };
-                            let fc = e.truncate();
-                            let pdf_b = e.w;
-                            // A normal or bump map weighs the direction (and zeroes its
-                            // density where it lies on different sides of the frames).
-                            let mut pw = 1.0f32;
-                            if perturbed {
-                                pw = perturb_weight(base, np, wi, shadowing);
-                            }
-                            let mut pdf_scatter = pdf_b * opacity;
-                            if pw == 0.0 {
-                                pdf_scatter = 0.0;
-                            }
-                            // A mask scatters only its opacity's share, and samples it so.
-                            let weight = if delta_select > 0.0 {
-                                1.0 / delta_select
-                            } else {
-                                mis_power(light_pdf, pdf_scatter) / light_pdf
-                            };
-                            ld = thr * fc * le * (weight * opacity * pw);
-                            // A transmitting BSDF's light sample leaves from the far side.
-                            // Towards a light at a finite distance it aims from there at the
-                            // point short of the light where the near side's ray stopped:
-                            // parallel to `wi` it could meet the light's own plane first
-                            // (seen at a slant, by twice the offset), and the light would
-                            // block its own sample.
-                            let mut so = o;
-                            let mut st = tmax;
-                            let mut sd = wi;
-                            if wi.dot(ng_n) < 0.0 {
-                                so = offset_origin(p, -ng_n);
-                                if tmax < 1.0e30 {
-                                    let to_end = o + wi * tmax - so;
-                                    st = to_end.length();
-                                    sd = to_end / st;
-                                }
-                            }
-                            sh_o = so.extend(st);
-                            sh_d = sd;
+                        light_on = light_pdf > 0.0 || delta_select > 0.0;
+                    }
+                }
+                // The BSDF, in one dispatch (`crate::bsdf`): its value towards the light
+                // sample (a blend's comes from `blend_eval`) and the next direction (none
+                // where the path passes through).
+                let mut u_glossy = u;
+                if f.coherent_glossy != 0 {
+                    let cell = shared_cell % (f.patches_n * f.patches_n);
+                    u_glossy = cell_point(cell, f.patches_n, u);
+                }
+                let draws = Draws {
+                    u,
+                    u_glossy,
+                    choice: uniform(key, 4),
+                    group_value: shared_patch,
+                    patches_n: f.patches_n,
+                    pad: 0,
+                };
+                let shaded = bsdf_shade::<S>(
+                    shading,
+                    textures,
+                    tex_coords,
+                    at,
+                    wi,
+                    I::NEE && light_on && !mixture,
+                    thr,
+                    draws,
+                    !pass_through && !masked_through,
+                );
+                if I::NEE && light_on {
+                    // f·cos and the BSDF-sampling density of `wi`.
+                    let e = if mixture {
+                        blend_eval(
+                            shading, materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
+                            front, BLEND_NONE,
+                        )
+                    } else {
+                        shaded.eval
+                    };
+                    let fc = e.truncate();
+                    let pdf_b = e.w;
+                    // A normal or bump map weighs the direction (and zeroes its
+                    // density where it lies on different sides of the frames).
+                    let mut pw = 1.0f32;
+                    if perturbed {
+                        pw = perturb_weight(base, np, wi, shadowing);
+                    }
+                    let mut pdf_scatter = pdf_b * opacity;
+                    if pw == 0.0 {
+                        pdf_scatter = 0.0;
+                    }
+                    // A mask scatters only its opacity's share, and samples it so.
+                    let weight = if delta_select > 0.0 {
+                        1.0 / delta_select
+                    } else {
+                        mis_power(light_pdf, pdf_scatter) / light_pdf
+                    };
+                    ld = thr * fc * le * (weight * opacity * pw);
+                    // A transmitting BSDF's light sample leaves from the far side.
+                    // Towards a light at a finite distance it aims from there at the
+                    // point short of the light where the near side's ray stopped:
+                    // parallel to `wi` it could meet the light's own plane first
+                    // (seen at a slant, by twice the offset), and the light would
+                    // block its own sample.
+                    let mut so = o;
+                    let mut st = tmax;
+                    let mut sd = wi;
+                    if wi.dot(ng_n) < 0.0 {
+                        so = offset_origin(p, -ng_n);
+                        if tmax < 1.0e30 {
+                            let to_end = o + wi * tmax - so;
+                            st = to_end.length();
+                            sd = to_end / st;
                         }
                     }
+                    sh_o = so.extend(st);
+                    sh_d = sd;
                 }
                 // The throughput before this vertex's BSDF weighs it, and the probability
                 // with which the BSDF chose the delta lobe it sampled (0: none), for a
@@ -649,21 +679,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     new_d = d;
                     alive = true;
                 } else {
-                    // The material's BSDF draws the next direction (`crate::bsdf`).
-                    let mut u_glossy = u;
-                    if f.coherent_glossy != 0 {
-                        let cell = shared_cell % (f.patches_n * f.patches_n);
-                        u_glossy = cell_point(cell, f.patches_n, u);
-                    }
-                    let draws = Draws {
-                        u,
-                        u_glossy,
-                        choice: uniform(key, 4),
-                        group_value: shared_patch,
-                        patches_n: f.patches_n,
-                        pad: 0,
-                    };
-                    let s = bsdf_sample::<S>(shading, textures, tex_coords, at, thr, draws);
+                    let s = shaded.next;
                     if s.alive != 0 {
                         new_d = s.dir;
                         thr = s.beta;
@@ -682,22 +698,27 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // BSDF's delta value and lobe probability, the other BSDFs' value and
                 // density there (`crate::scatter`). It stays a delta bounce for MIS.
                 // (With or without light sampling: it is the BSDF's weight, not a density.)
-                if plain_blend && alive && delta_p > 0.0 {
-                    let rest = blend_eval(
+                // A blend's non-delta direction, drawn by one of its BSDFs, is weighed
+                // against light sampling by the blend's density. One `blend_eval` at the
+                // drawn direction serves either (a delta lobe's density is 0, so never both).
+                let blend_delta = plain_blend && alive && delta_p > 0.0;
+                let blend_pdf =
+                    mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through;
+                if blend_delta || blend_pdf {
+                    let mut skip = BLEND_NONE;
+                    if blend_delta {
+                        skip = picked;
+                    }
+                    let b = blend_eval(
                         shading, materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng,
-                        front, picked,
+                        front, skip,
                     );
-                    let own = pick_p * delta_p;
-                    thr = (thr * own + thr_in * rest.truncate()) / (own + rest.w);
-                }
-                // A blend's sampled direction, drawn by one of its BSDFs, is weighed against
-                // light sampling by the blend's density (delta directions keep 0).
-                if mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through {
-                    bsdf_pdf = blend_eval(
-                        shading, materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng,
-                        front, BLEND_NONE,
-                    )
-                    .w;
+                    if blend_delta {
+                        let own = pick_p * delta_p;
+                        thr = (thr * own + thr_in * b.truncate()) / (own + b.w);
+                    } else {
+                        bsdf_pdf = b.w;
+                    }
                 }
                 // A normal or bump map weighs the sampled direction as it weighs light
                 // samples (Mitsuba's `sample`: zero on different sides of the frames).

@@ -2,7 +2,7 @@
 //! and one table (the `bsdfs!` invocation at the end) that lists them. The table is the only place a BSDF is
 //! named: it generates the material kinds' names ([`KINDS`], used for labels, `--stats`
 //! and the scene-set bits of `crate::shading`), and the three dispatches `extend` and
-//! [`crate::scatter`] call on a material — [`bsdf_light_sampled`], [`bsdf_sample`] and
+//! [`crate::scatter`] call on a material — [`bsdf_light_sampled`], [`bsdf_shade`] and
 //! [`bsdf_eval`] — each a chain over the table in which the BSDFs outside the scene's
 //! shading set (a `#[specialize]` value of `extend`) are false when the kernel is built
 //! and left out. Adding a BSDF is one file with its impl and one line of the table (plus
@@ -68,6 +68,18 @@ pub struct Scattered {
     pub alive: u32,
     pub pad_a: u32,
     pub pad_b: u32,
+}
+
+/// What [`Bsdf::shade`] returns: the BSDF at the light sample's direction and the
+/// direction it drew.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Shaded {
+    /// `f · cos` (xyz) and the BSDF-sampling density (w) towards the light sample (zero
+    /// where it was not asked for).
+    pub eval: Vec4,
+    /// The next direction ([`absorbed`] where it was not asked for).
+    pub next: Scattered,
 }
 
 /// A surface point as a BSDF sees it ([`hit`] makes one). Directions are world-space.
@@ -156,6 +168,32 @@ pub trait Bsdf {
     /// `f · cos` (xyz) and the BSDF-sampling density (w) for light arriving from `wi`
     /// (only called where [`Bsdf::scatters`]; zero for a BSDF without a non-delta lobe).
     fn eval(textures: &[Vec4], tex_coords: &[Vec4], at: Hit, wi: Vec3) -> Vec4;
+
+    /// A vertex's whole use of the BSDF, as `extend` makes it: [`Bsdf::eval`] towards the
+    /// light sample `wi` where `evaluate`, and [`Bsdf::sample`] where `draw`. One call
+    /// site in the kernel instead of two: a BSDF whose parameters cost texture reads (a
+    /// principled BSDF's dozen) overrides it to read them once, which halves its share
+    /// of the kernel's code (pipeline creation time grows with it).
+    fn shade<S: DiffuseSampler>(
+        textures: &[Vec4],
+        tex_coords: &[Vec4],
+        at: Hit,
+        wi: Vec3,
+        evaluate: bool,
+        beta: Vec3,
+        r: Draws,
+        draw: bool,
+    ) -> Shaded {
+        let mut eval = Vec4::ZERO;
+        if Self::NON_DELTA && evaluate {
+            eval = Self::eval(textures, tex_coords, at, wi);
+        }
+        let mut next = absorbed();
+        if draw {
+            next = Self::sample::<S>(textures, tex_coords, at, beta, r);
+        }
+        Shaded { eval, next }
+    }
 }
 
 /// The [`Scattered`] of a path the BSDF ends (nothing drawn).
@@ -210,29 +248,38 @@ macro_rules! bsdfs {
             lit
         }
 
-        /// [`Bsdf::sample`] of the BSDF at `at`, or [`absorbed`] where it does not
-        /// scatter (a one-sided BSDF seen from the back, a black diffuse surface, a kind
-        /// outside `shading`).
+        /// [`Bsdf::shade`] of the BSDF at `at`: its value towards `wi` where `evaluate`
+        /// and it has a non-delta lobe, the next direction where `draw`; zero and
+        /// [`absorbed`] where it does not scatter (a one-sided BSDF seen from the back, a
+        /// black diffuse surface, a kind outside `shading`).
         #[kernel_fn]
-        pub fn bsdf_sample<S: DiffuseSampler>(
+        pub fn bsdf_shade<S: DiffuseSampler>(
             shading: u32,
             textures: &[Vec4],
             tex_coords: &[Vec4],
             at: Hit,
+            wi: Vec3,
+            evaluate: bool,
             beta: Vec3,
             r: Draws,
-        ) -> Scattered {
+            draw: bool,
+        ) -> Shaded {
             let bit = 1u32 << at.m.kind;
-            let mut s = absorbed();
+            let mut out = Shaded {
+                eval: Vec4::ZERO,
+                next: absorbed(),
+            };
             $(
                 if shading & <$ty as Bsdf>::KINDS != 0
                     && bit & <$ty as Bsdf>::KINDS != 0
                     && <$ty as Bsdf>::scatters(at)
                 {
-                    s = <$ty as Bsdf>::sample::<S>(textures, tex_coords, at, beta, r);
+                    out = <$ty as Bsdf>::shade::<S>(
+                        textures, tex_coords, at, wi, evaluate, beta, r, draw,
+                    );
                 }
             )+
-            s
+            out
         }
 
         /// [`Bsdf::eval`] of the BSDF at `at`: `f · cos` (xyz) and the BSDF-sampling

@@ -13,7 +13,7 @@
 //! Transmission scales radiance by 1 / eta², as Mitsuba's radiance transport and
 //! `rough_dielectric` do.
 
-use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered};
+use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered, Shaded};
 use crate::layout::*;
 use crate::microfacet::{ggx_d, ggx_g1, visible_pdf, visible_sample};
 use crate::sampling::{concentric_disk, fresnel_dielectric, DiffuseSampler};
@@ -661,34 +661,71 @@ impl Bsdf for PrincipledBsdf {
     ) -> Scattered {
         let fr = frame(at.m, textures, tex_coords, at.t, at.ng, at.n, at.front != 0);
         let pp = params(textures, at.m, at.albedo, at.uv, at.t.original, at.h);
-        let wi_l = fr.transpose() * -at.d;
-        let wl = sample_kind(pp, at.m.kind, wi_l, r.u, r.choice);
-        let mut out = absorbed();
-        if wl.dot(wl) > 0.0 {
-            let e = eval_kind(pp, at.m.kind, wi_l, wl);
-            if e.w > 0.0 {
-                // A refraction through `principled` (its value carries the 1 / eta²);
-                // `principledthin` stays on its side of the index.
-                let mut eta2 = 1.0f32;
-                if at.m.kind == PRINCIPLED && wi_l.z * wl.z < 0.0 {
-                    let eta_path = if wi_l.z > 0.0 { pp.eta } else { 1.0 / pp.eta };
-                    eta2 = eta_path * eta_path;
-                }
-                out = scattered(
-                    (fr * wl).normalize(),
-                    e.w,
-                    beta * e.truncate() / e.w,
-                    0.0,
-                    eta2,
-                );
-            }
-        }
-        out
+        sample_in(fr, pp, at, beta, r)
     }
 
     fn eval(textures: &[Vec4], tex_coords: &[Vec4], at: Hit, wi: Vec3) -> Vec4 {
         let fr = frame(at.m, textures, tex_coords, at.t, at.ng, at.n, at.front != 0);
         let pp = params(textures, at.m, at.albedo, at.uv, at.t.original, at.h);
-        eval_kind(pp, at.m.kind, fr.transpose() * -at.d, fr.transpose() * wi)
+        eval_in(fr, pp, at, wi)
     }
+
+    /// The frame and the parameters (a texture read each, where textured) are read once
+    /// for both uses.
+    fn shade<S: DiffuseSampler>(
+        textures: &[Vec4],
+        tex_coords: &[Vec4],
+        at: Hit,
+        wi: Vec3,
+        evaluate: bool,
+        beta: Vec3,
+        r: Draws,
+        draw: bool,
+    ) -> Shaded {
+        let fr = frame(at.m, textures, tex_coords, at.t, at.ng, at.n, at.front != 0);
+        let pp = params(textures, at.m, at.albedo, at.uv, at.t.original, at.h);
+        let mut eval = Vec4::ZERO;
+        if evaluate {
+            eval = eval_in(fr, pp, at, wi);
+        }
+        let mut next = absorbed();
+        if draw {
+            next = sample_in(fr, pp, at, beta, r);
+        }
+        Shaded { eval, next }
+    }
+}
+
+/// [`Bsdf::sample`] of the principled BSDF in frame `fr` with parameters `pp`.
+#[kernel_fn]
+pub fn sample_in(fr: Mat3, pp: Principled, at: Hit, beta: Vec3, r: Draws) -> Scattered {
+    let wi_l = fr.transpose() * -at.d;
+    let wl = sample_kind(pp, at.m.kind, wi_l, r.u, r.choice);
+    let mut out = absorbed();
+    if wl.dot(wl) > 0.0 {
+        let e = eval_kind(pp, at.m.kind, wi_l, wl);
+        if e.w > 0.0 {
+            // A refraction through `principled` (its value carries the 1 / eta²);
+            // `principledthin` stays on its side of the index.
+            let mut eta2 = 1.0f32;
+            if at.m.kind == PRINCIPLED && wi_l.z * wl.z < 0.0 {
+                let eta_path = if wi_l.z > 0.0 { pp.eta } else { 1.0 / pp.eta };
+                eta2 = eta_path * eta_path;
+            }
+            out = scattered(
+                (fr * wl).normalize(),
+                e.w,
+                beta * e.truncate() / e.w,
+                0.0,
+                eta2,
+            );
+        }
+    }
+    out
+}
+
+/// [`Bsdf::eval`] of the principled BSDF in frame `fr` with parameters `pp`.
+#[kernel_fn]
+pub fn eval_in(fr: Mat3, pp: Principled, at: Hit, wi: Vec3) -> Vec4 {
+    eval_kind(pp, at.m.kind, fr.transpose() * -at.d, fr.transpose() * wi)
 }
