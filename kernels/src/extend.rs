@@ -614,55 +614,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     draws,
                     !pass_through && !masked_through,
                 );
-                if I::NEE && light_on {
-                    // f·cos and the BSDF-sampling density of `wi`.
-                    let e = if mixture {
-                        blend_eval(
-                            shading, materials, textures, tex_coords, root, t, h, uv, d, wi, n, ng,
-                            front, BLEND_NONE,
-                        )
-                    } else {
-                        shaded.eval
-                    };
-                    let fc = e.truncate();
-                    let pdf_b = e.w;
-                    // A normal or bump map weighs the direction (and zeroes its
-                    // density where it lies on different sides of the frames).
-                    let mut pw = 1.0f32;
-                    if perturbed {
-                        pw = perturb_weight(base, np, wi, shadowing);
-                    }
-                    let mut pdf_scatter = pdf_b * opacity;
-                    if pw == 0.0 {
-                        pdf_scatter = 0.0;
-                    }
-                    // A mask scatters only its opacity's share, and samples it so.
-                    let weight = if delta_select > 0.0 {
-                        1.0 / delta_select
-                    } else {
-                        mis_power(light_pdf, pdf_scatter) / light_pdf
-                    };
-                    ld = thr * fc * le * (weight * opacity * pw);
-                    // A transmitting BSDF's light sample leaves from the far side.
-                    // Towards a light at a finite distance it aims from there at the
-                    // point short of the light where the near side's ray stopped:
-                    // parallel to `wi` it could meet the light's own plane first
-                    // (seen at a slant, by twice the offset), and the light would
-                    // block its own sample.
-                    let mut so = o;
-                    let mut st = tmax;
-                    let mut sd = wi;
-                    if wi.dot(ng_n) < 0.0 {
-                        so = offset_origin(p, -ng_n);
-                        if tmax < 1.0e30 {
-                            let to_end = o + wi * tmax - so;
-                            st = to_end.length();
-                            sd = to_end / st;
-                        }
-                    }
-                    sh_o = so.extend(st);
-                    sh_d = sd;
-                }
                 // The throughput before this vertex's BSDF weighs it, and the probability
                 // with which the BSDF chose the delta lobe it sampled (0: none), for a
                 // blend's delta directions (below).
@@ -699,26 +650,93 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // density there (`crate::scatter`). It stays a delta bounce for MIS.
                 // (With or without light sampling: it is the BSDF's weight, not a density.)
                 // A blend's non-delta direction, drawn by one of its BSDFs, is weighed
-                // against light sampling by the blend's density. One `blend_eval` at the
-                // drawn direction serves either (a delta lobe's density is 0, so never both).
+                // against light sampling by the blend's density (a delta lobe's density is
+                // 0, so never both).
                 let blend_delta = plain_blend && alive && delta_p > 0.0;
                 let blend_pdf =
                     mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through;
-                if blend_delta || blend_pdf {
-                    let mut skip = BLEND_NONE;
-                    if blend_delta {
-                        skip = picked;
+                // The blend's evaluations, towards the light sample (k = 0) and at the drawn
+                // direction (k = 1), at one call site: each inlines every BSDF of the blend
+                // (pipeline creation time grows with the code).
+                let mut blend_light = Vec4::ZERO;
+                let mut blend_next = Vec4::ZERO;
+                if has_blend {
+                    let mut k = 0u32;
+                    while k < 2 {
+                        let towards_light = k == 0;
+                        let wanted = if towards_light {
+                            I::NEE && light_on && mixture
+                        } else {
+                            blend_delta || blend_pdf
+                        };
+                        if wanted {
+                            let mut dir = new_d;
+                            let mut skip = BLEND_NONE;
+                            if towards_light {
+                                dir = wi;
+                            } else if blend_delta {
+                                skip = picked;
+                            }
+                            let b = blend_eval(
+                                shading, materials, textures, tex_coords, root, t, h, uv, d, dir,
+                                n, ng, front, skip,
+                            );
+                            if towards_light {
+                                blend_light = b;
+                            } else {
+                                blend_next = b;
+                            }
+                        }
+                        k += 1;
                     }
-                    let b = blend_eval(
-                        shading, materials, textures, tex_coords, root, t, h, uv, d, new_d, n, ng,
-                        front, skip,
-                    );
-                    if blend_delta {
-                        let own = pick_p * delta_p;
-                        thr = (thr * own + thr_in * b.truncate()) / (own + b.w);
+                }
+                if blend_delta {
+                    let own = pick_p * delta_p;
+                    thr = (thr * own + thr_in * blend_next.truncate()) / (own + blend_next.w);
+                } else if blend_pdf {
+                    bsdf_pdf = blend_next.w;
+                }
+                if I::NEE && light_on {
+                    // f·cos and the BSDF-sampling density of `wi`.
+                    let e = if mixture { blend_light } else { shaded.eval };
+                    let fc = e.truncate();
+                    let pdf_b = e.w;
+                    // A normal or bump map weighs the direction (and zeroes its
+                    // density where it lies on different sides of the frames).
+                    let mut pw = 1.0f32;
+                    if perturbed {
+                        pw = perturb_weight(base, np, wi, shadowing);
+                    }
+                    let mut pdf_scatter = pdf_b * opacity;
+                    if pw == 0.0 {
+                        pdf_scatter = 0.0;
+                    }
+                    // A mask scatters only its opacity's share, and samples it so.
+                    let weight = if delta_select > 0.0 {
+                        1.0 / delta_select
                     } else {
-                        bsdf_pdf = b.w;
+                        mis_power(light_pdf, pdf_scatter) / light_pdf
+                    };
+                    ld = thr_in * fc * le * (weight * opacity * pw);
+                    // A transmitting BSDF's light sample leaves from the far side.
+                    // Towards a light at a finite distance it aims from there at the
+                    // point short of the light where the near side's ray stopped:
+                    // parallel to `wi` it could meet the light's own plane first
+                    // (seen at a slant, by twice the offset), and the light would
+                    // block its own sample.
+                    let mut so = o;
+                    let mut st = tmax;
+                    let mut sd = wi;
+                    if wi.dot(ng_n) < 0.0 {
+                        so = offset_origin(p, -ng_n);
+                        if tmax < 1.0e30 {
+                            let to_end = o + wi * tmax - so;
+                            st = to_end.length();
+                            sd = to_end / st;
+                        }
                     }
+                    sh_o = so.extend(st);
+                    sh_d = sd;
                 }
                 // A normal or bump map weighs the sampled direction as it weighs light
                 // samples (Mitsuba's `sample`: zero on different sides of the frames).

@@ -36,26 +36,39 @@ pub fn params(
     h: Vec4,
 ) -> Principled {
     let at = (m.table - 1) as usize;
-    let a = textures[at];
-    let b = textures[at + 1];
     let c = textures[at + 2];
     let r = textures[at + 3];
-    let ta = textures[at + 4];
-    let tb = textures[at + 5];
-    let tc = textures[at + 6];
+    // The eleven numbers that may be textured (roughness .. diff_trans, four to a texel,
+    // their texture headers three texels on): one texture read site in a loop rather than
+    // eleven inlined copies of it, since pipeline creation time grows with the code.
+    let mut v = [0.0f32; 11];
+    let mut k = 0u32;
+    while k < 11 {
+        let q = at + (k / 4) as usize;
+        let header = component(textures[q + 4], k % 4);
+        v[k as usize] = number_at(
+            textures,
+            header,
+            component(textures[q], k % 4),
+            uv,
+            original,
+            h,
+        );
+        k += 1;
+    }
     Principled {
         base_color,
-        roughness: number_at(textures, ta.x, a.x, uv, original, h),
-        anisotropic: number_at(textures, ta.y, a.y, uv, original, h),
-        metallic: number_at(textures, ta.z, a.z, uv, original, h),
-        spec_trans: number_at(textures, ta.w, a.w, uv, original, h),
-        spec_tint: number_at(textures, tb.x, b.x, uv, original, h),
-        sheen: number_at(textures, tb.y, b.y, uv, original, h),
-        sheen_tint: number_at(textures, tb.z, b.z, uv, original, h),
-        clearcoat: number_at(textures, tb.w, b.w, uv, original, h),
-        clearcoat_gloss: number_at(textures, tc.x, c.x, uv, original, h),
-        flatness: number_at(textures, tc.y, c.y, uv, original, h),
-        diff_trans: number_at(textures, tc.z, c.z, uv, original, h),
+        roughness: v[0],
+        anisotropic: v[1],
+        metallic: v[2],
+        spec_trans: v[3],
+        spec_tint: v[4],
+        sheen: v[5],
+        sheen_tint: v[6],
+        clearcoat: v[7],
+        clearcoat_gloss: v[8],
+        flatness: v[9],
+        diff_trans: v[10],
         eta: c.w,
         rate_a: r.x,
         rate_b: r.y,
@@ -63,6 +76,20 @@ pub fn params(
         rate_d: r.w,
         pad: 0,
     }
+}
+
+/// Component `i` (0 to 3) of `v`.
+#[kernel_fn]
+pub fn component(v: Vec4, i: u32) -> f32 {
+    let mut c = v.w;
+    if i == 0 {
+        c = v.x;
+    } else if i == 1 {
+        c = v.y;
+    } else if i == 2 {
+        c = v.z;
+    }
+    c
 }
 
 /// A parameter given as `value`, or, where `header` holds a texture's header + 1 (as
