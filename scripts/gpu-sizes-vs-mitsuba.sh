@@ -4,16 +4,30 @@
 # stanford-like, Mitsuba `cuda_ad_rgb` against `cohort render` with its wavefront sized to
 # the device and with `--wavefront 1` (one slot per pixel, as before). The ratio is taken at
 # Mitsuba's 1024-spp error at 128 and 256, its 256-spp error at 512 and 1024.
-# Needs: $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
+# Needs: $B/cohort or $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
 # unpacked and trimmed to cuda_ad_rgb and the scenes' plugins, as a tar.xz of a `site`
 # folder), $SCENES/{cornell-box,stanford-like} (or the scene folders named in $NAMES,
 # comma-separated, e.g. NAMES=bunny-box SIZES=512 for the scanned mesh). On the device:
-#   OUT=$OUT B=gpu-pack2 SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
+#   OUT=$OUT B=bin-gpu SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
-B="${B:-gpu-pack2}"; SITE="${SITE:-gpu-mitsuba/site.tar.xz}"; SCENES="${SCENES:-render/tests/scenes}"
-(cd "$B" && xz -dkf cohort.xz && chmod +x cohort) || exit 1
-tar -C /tmp -xJf "$SITE" || exit 1
+B="${B:-bin-gpu}"; SITE="${SITE:-gpu-mitsuba/site.tar.xz}"; SCENES="${SCENES:-render/tests/scenes}"
+# The binary: $B/cohort (e.g. B=bin-gpu from scripts/build-gpu-bins.sh), or $B/cohort.xz.
+if [ -f "$B/cohort.xz" ] && [ ! -x "$B/cohort" ]; then
+  (cd "$B" && xz -dkf cohort.xz && chmod +x cohort) || exit 1
+fi
+if [ ! -x "$B/cohort" ]; then
+  echo "error: no $B/cohort or $B/cohort.xz: build one with scripts/build-gpu-bins.sh (B=bin-gpu)" >&2
+  exit 1
+fi
+# Mitsuba: $SITE unpacked (pip install --target site mitsuba==3.9.1 drjit, for the device's
+# Python, then tar cJf site.tar.xz site), or already importable as `mitsuba` here.
+if [ -f "$SITE" ]; then
+  tar -C /tmp -xJf "$SITE" || exit 1
+elif ! python3 -c "import mitsuba" 2>/dev/null; then
+  echo "error: no $SITE and no importable mitsuba: make one as this script's header says" >&2
+  exit 1
+fi
 export PYTHONPATH=/tmp/site PYTHONUNBUFFERED=1 COHORT_VK_VALIDATION=0
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv | tee "$OUT/gpu.txt"
