@@ -23,9 +23,11 @@ fn first_device() -> Option<Device> {
     Some(Device::best().expect("the CPU backend always opens"))
 }
 
+/// A reference scene of the repository (`render/tests/scenes/NAME`), so that the test needs
+/// no folder beside the clone.
 fn shared(name: &str) -> Scene {
     let path = format!(
-        "{}/../../shared/scenes/{name}/scene.xml",
+        "{}/tests/scenes/{name}/scene.xml",
         env!("CARGO_MANIFEST_DIR")
     );
     cohort_scenes::load_mitsuba(&path)

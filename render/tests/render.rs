@@ -98,9 +98,11 @@ fn white_furnace() {
     }
 }
 
+/// A reference scene of the repository (`render/tests/scenes/NAME`), so that the test needs
+/// no folder beside the clone.
 fn shared(name: &str) -> Scene {
     let path = format!(
-        "{}/../../shared/scenes/{name}/scene.xml",
+        "{}/tests/scenes/{name}/scene.xml",
         env!("CARGO_MANIFEST_DIR")
     );
     cohort_scenes::load_mitsuba(&path)
