@@ -179,6 +179,30 @@ pub enum RouletteChoice {
     Mitsuba,
 }
 
+/// `--shading`: how shading is organised (`cohort_render::Shading`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShadingChoice {
+    /// Both designs measured on the render, the faster kept, where the choice cannot
+    /// change the image (a GPU, draws keyed by path, a scene of several BSDF kinds);
+    /// elsewhere one kernel.
+    Auto,
+    /// One shading kernel built with the scene's BSDF kinds shades every ray.
+    Kernel,
+    /// Material queues: the rays are partitioned by the BSDF kind they hit, and one
+    /// shading kernel per kind shades its queue (pbrt-v4's wavefront organisation).
+    Queues,
+}
+
+impl ShadingChoice {
+    pub fn to_render(self) -> cohort_render::Shading {
+        match self {
+            ShadingChoice::Auto => cohort_render::Shading::Auto,
+            ShadingChoice::Kernel => cohort_render::Shading::Kernel,
+            ShadingChoice::Queues => cohort_render::Shading::Queues,
+        }
+    }
+}
+
 /// `--integrator`: the light transport estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum IntegratorChoice {

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use choices::{
-    AlgorithmChoice, Backend, DeviceList, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice,
+    AlgorithmChoice, Backend, DeviceList, InPatchChoice, IntegratorChoice, RouletteChoice,
+    RrChoice, ShadingChoice,
 };
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
@@ -145,6 +146,13 @@ struct RenderArgs {
         allow_negative_numbers = true
     )]
     reorder: u32,
+    /// How shading is organised: one kernel built with the scene's BSDF kinds, material
+    /// queues (one kernel per kind over the rays that hit it), or `auto`, the default:
+    /// both measured on the render and the faster kept (BENCHMARKS.md: each wins on some
+    /// scenes). The image is the same either way, except with coherent groups, which
+    /// form over the queues (and where `auto` keeps one kernel).
+    #[arg(long, value_enum, default_value_t = ShadingChoice::Auto)]
+    shading: ShadingChoice,
     /// Ray slots in flight: paths traced at once. Rounded up to whole copies of the image
     /// (several paths of each pixel at once), at most one copy per path of the budget.
     /// Default: chosen from the device (about a million on a GPU, 16384 on the CPU
@@ -256,6 +264,7 @@ impl RenderArgs {
             coherent_glossy: self.coherent_glossy,
             compact: self.compact,
             reorder: self.reorder,
+            shading: self.shading,
             integrator: self.integrator,
             coherent_light: self.coherent_light,
             light_cells: self.light_cells,
@@ -540,13 +549,20 @@ fn render(a: RenderArgs) -> Result<(), String> {
         stats.slots
     );
     println!(
-        "kernel time    {:.1} ms: reorder {:.1}, traverse {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
+        "kernel time    {:.1} ms: reorder {:.1}, traverse {:.1}, queue {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
         ms(k.total()),
         ms(k.reorder),
         ms(k.traverse),
+        ms(k.queue),
         ms(k.extend),
         ms(k.shadow),
         ms(k.compact)
+    );
+    println!(
+        "shading        {} ({} of {} iterations over material queues)",
+        choices::name(&a.shading),
+        stats.queued_iterations,
+        stats.iterations
     );
     println!(
         "paths/s        {:.3} M (per kernel second)",
@@ -610,11 +626,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": choices::name(&a.in_patch), "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
-            "compaction": a.compact, "reorder": a.reorder, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
+            "compaction": a.compact, "reorder": a.reorder, "shading_design": choices::name(&a.shading), "queued_iterations": stats.queued_iterations, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "shard": shard.to_string(), "devices": device_names,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays, "slots": stats.slots,
-            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "reorder": ms(k.reorder), "total": ms(k.total()) },
+            "kernel_ms": { "traverse": ms(k.traverse), "extend": ms(k.extend), "shadow": ms(k.shadow), "compact": ms(k.compact), "reorder": ms(k.reorder), "queue": ms(k.queue), "total": ms(k.total()) },
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(), "outputs_s": written.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },

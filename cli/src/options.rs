@@ -6,7 +6,7 @@
 use cohort_render::{RenderOptions, Roulette};
 
 use crate::choices::{
-    self, AlgorithmChoice, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice,
+    self, AlgorithmChoice, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice, ShadingChoice,
 };
 
 /// The options that select the estimator and the paper's configuration, as the user
@@ -23,6 +23,7 @@ pub struct Config {
     pub coherent_glossy: bool,
     pub compact: bool,
     pub reorder: u32,
+    pub shading: ShadingChoice,
     pub integrator: IntegratorChoice,
     pub coherent_light: bool,
     pub light_cells: u32,
@@ -44,6 +45,7 @@ pub const NAMES: &[&str] = &[
     "coherent-glossy",
     "compact",
     "reorder",
+    "shading",
     "integrator",
     "coherent-light",
     "light-cells",
@@ -76,6 +78,7 @@ impl Config {
             "coherent-glossy" => parse_bool(value).map(|v| self.coherent_glossy = v),
             "compact" => parse_bool(value).map(|v| self.compact = v),
             "reorder" => parse_number(clap::value_parser!(u32), value).map(|v| self.reorder = v),
+            "shading" => parse(value).map(|v| self.shading = v),
             "integrator" => parse(value).map(|v| self.integrator = v),
             "coherent-light" => parse_bool(value).map(|v| self.coherent_light = v),
             "light-cells" => {
@@ -107,6 +110,7 @@ impl Config {
             "coherent-glossy" => on_off(self.coherent_glossy),
             "compact" => on_off(self.compact),
             "reorder" => self.reorder.to_string(),
+            "shading" => n(&self.shading),
             "integrator" => n(&self.integrator),
             "coherent-light" => on_off(self.coherent_light),
             "light-cells" => self.light_cells.to_string(),
@@ -154,6 +158,7 @@ impl Config {
             seed: self.seed,
             compact: self.compact,
             reorder: self.reorder,
+            shading: self.shading.to_render(),
             whole_group_end,
             integrator: self.integrator.to_render(),
             roulette,
@@ -205,6 +210,7 @@ mod tests {
             coherent_glossy: false,
             compact: false,
             reorder: 0,
+            shading: ShadingChoice::Auto,
             integrator: IntegratorChoice::Nee,
             coherent_light: false,
             light_cells: 4,

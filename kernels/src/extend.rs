@@ -331,7 +331,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     });
     // Phase 1: shade and decide per path. What phase 2 needs outlives the branch, because
     // the group may vote in between, which every invocation must reach.
-    let i = gi as usize;
+    // A material queue's `extend` (`crate::queues`) takes its rays from the queue: its
+    // size, start and list length at `count[4 q ..]`, each ray's slot at its place and,
+    // the list's length further on, the ray's position in the live list, where its
+    // compaction flag goes. Without queues, `q4` is 0 and the branch is left out.
+    let queued = shading & SHADES_QUEUE != 0;
+    let q4 = 4 * (shading >> QUEUE_SHIFT) as usize;
+    let mut i = gi as usize;
     let mut r = 0usize;
     let mut active = false;
     let mut alive = false;
@@ -358,8 +364,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut ld = Vec3::ZERO;
     let mut sh_o = Vec4::ZERO;
     let mut sh_d = Vec3::ZERO;
-    if gi < count[0] {
-        r = idrays[i] as usize;
+    if gi < count[q4] {
+        if queued {
+            let at = count[q4 + 1] as usize + i;
+            r = idrays[at] as usize;
+            i = idrays[count[q4 + 2] as usize + at] as usize;
+        } else {
+            r = idrays[i] as usize;
+        }
         let st = state[r];
         if st.w & DONE != 0 {
             flags[i] = 0;

@@ -30,6 +30,7 @@ pub mod light;
 pub mod microfacet;
 pub mod path_end;
 pub mod perturb;
+pub mod queues;
 pub mod reorder;
 pub mod rng;
 pub mod sampling;

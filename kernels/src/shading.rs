@@ -31,6 +31,22 @@ pub const SHADES_DELTA_LIGHTS: u32 = 1 << 20;
 /// The environment is a map (`Frame::env_map`), not a constant.
 pub const SHADES_ENV_MAP: u32 = 1 << 21;
 
+/// `extend` shades one material queue (`crate::queues`): it reads its rays from the
+/// queue, whose index is in the bits from [`QUEUE_SHIFT`], not from the live list.
+pub const SHADES_QUEUE: u32 = 1 << 22;
+/// The first bit of a queue's index in a set with [`SHADES_QUEUE`].
+pub const QUEUE_SHIFT: u32 = 24;
+
+/// The set of the `extend` that shades queue `queue` with `set`.
+pub const fn queue_set(set: u32, queue: u32) -> u32 {
+    set | SHADES_QUEUE | queue << QUEUE_SHIFT
+}
+
+/// The queue that an `extend` built with `set` shades (0 without [`SHADES_QUEUE`]).
+pub const fn queue_index(set: u32) -> u32 {
+    set >> QUEUE_SHIFT
+}
+
 /// The features of [`SHADES_BLEND`] and after, with their names in labels.
 pub const FEATURES: [(u32, &str); 6] = [
     (SHADES_BLEND, "blend"),
@@ -99,9 +115,14 @@ pub fn label(set: u32) -> String {
         .filter(|(bit, _)| set & bit != 0)
         .map(|(_, name)| name)
         .collect();
-    if names.is_empty() {
+    let names = if names.is_empty() {
         "none".into()
     } else {
         names.join("+")
+    };
+    if set & SHADES_QUEUE != 0 {
+        format!("{names} (queue {})", queue_index(set))
+    } else {
+        names
     }
 }

@@ -1,12 +1,12 @@
 //! Recording one iteration of the wavefront loop (the paper's §3) into a batch, stage by
-//! stage: reorder (every `RenderOptions::reorder` iterations), traverse, extend, the
-//! shadow pass of next-event estimation, compact. Each stage is a function of the
+//! stage: reorder (every `RenderOptions::reorder` iterations), traverse, queue (with
+//! `RenderOptions::shading`), extend, the shadow pass of next-event estimation, compact. Each stage is a function of the
 //! iteration's buffers ([`Wavefront`]), and labels every dispatch it records with its
 //! [`Stage`] as it records it ([`LabelledBatch`]): kernel time is summed by stage, however
 //! many dispatches a stage takes.
 
 use cohort::runtime::{Batch, GpuBuffer};
-use cohort_kernels::compact;
+use cohort::Grid;
 use cohort_kernels::extend::extend;
 use cohort_kernels::integrator::Integrator;
 use cohort_kernels::layout::Frame;
@@ -15,6 +15,7 @@ use cohort_kernels::reorder;
 use cohort_kernels::sampling::DiffuseSampler;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+use cohort_kernels::{compact, queues};
 
 use crate::kernels::Specs;
 use crate::paths::Paths;
@@ -28,6 +29,8 @@ pub(crate) enum Stage {
     Reorder,
     /// Closest hit of every live ray.
     Traverse,
+    /// Partition the hits into material queues (`RenderOptions::shading`).
+    Queue,
     /// Shade, sample lights and the next direction, end or continue paths.
     Extend,
     /// Occlusion of the light samples; finish the slots (next-event estimation only).
@@ -79,6 +82,8 @@ pub(crate) struct Wavefront<'a> {
     pub(crate) compaction: bool,
     /// Sort the rays every this many iterations; 0 = never (`RenderOptions::reorder`).
     pub(crate) reorder_every: u32,
+    /// Shade over material queues (`RenderOptions::shading`).
+    pub(crate) queues: bool,
 }
 
 impl<'a> Wavefront<'a> {
@@ -175,22 +180,62 @@ impl<'a> Wavefront<'a> {
     }
 
     /// Shades the hits of the `live` rays, samples lights and the next direction, and
-    /// ends or continues each path.
+    /// ends or continues each path: one `extend` built with the scene's set over the live
+    /// list, or, over material queues, one for each queue.
     fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &self,
         b: &mut LabelledBatch<'_>,
         live: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
         let (s, p) = (self.scene, self.paths);
+        let Some(q) = p.queues.as_ref().filter(|_| self.queues) else {
+            let all = Grid::Threads(self.frame.slots);
+            return self.shade::<S, E, I>(b, all, s.shading, &p.count, live);
+        };
+        b.stage(Stage::Queue, |b| {
+            queues::record(
+                b,
+                &self.specs.queues,
+                self.frame.slots,
+                &p.count,
+                live,
+                &p.state,
+                &p.hits,
+                &s.triangles,
+                &s.materials,
+                &q.buffers(),
+            )
+        })?;
+        for (i, &set) in q.plan.sets.iter().enumerate() {
+            let grid = Grid::Indirect {
+                args: &q.args,
+                offset_elems: 3 * i,
+            };
+            self.shade::<S, E, I>(b, grid, set, &q.queued, &q.out)?;
+        }
+        Ok(())
+    }
+
+    /// One `extend` built with `set`, over `grid`, for the rays that `count` and `list`
+    /// give (the live list, or a material queue).
+    fn shade<S: DiffuseSampler, E: PathEnd, I: Integrator>(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        grid: Grid<'_>,
+        set: u32,
+        count: &GpuBuffer<u32>,
+        list: &GpuBuffer<u32>,
+    ) -> Result<(), RenderError> {
+        let (s, p) = (self.scene, self.paths);
         b.stage(Stage::Extend, |b| {
             extend::record::<S, E, I>(
                 b,
                 &self.specs.extend,
-                self.frame.slots,
-                s.shading,
+                grid,
+                set,
                 self.frame,
-                &p.count,
-                live,
+                count,
+                list,
                 &p.hits,
                 &s.triangles,
                 &s.shading_normals,

@@ -6,20 +6,22 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use cohort::runtime::KernelArtifact;
+use cohort::runtime::{BackendKind, KernelArtifact};
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
-use cohort_kernels::reorder;
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
 };
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
+use cohort_kernels::{queues, reorder};
 
+use crate::design::Choice;
 use crate::paths::SortState;
-use crate::{Budget, InPatch, IntegratorKind, RenderError, RenderStats, Renderer};
+use crate::queues::{plan, QueueState};
+use crate::{Budget, InPatch, IntegratorKind, RenderError, RenderStats, Renderer, Shading};
 
 /// An operation over the kernels of the current options (see `Renderer::with_kernels`).
 pub(crate) trait KernelOp {
@@ -57,6 +59,7 @@ pub(crate) struct Specs {
     pub(crate) shadow8: cohort::Spec,
     pub(crate) compact: compact::Specs,
     pub(crate) reorder: reorder::Specs,
+    pub(crate) queues: queues::Specs,
 }
 
 impl Renderer<'_> {
@@ -98,6 +101,7 @@ impl Renderer<'_> {
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
             reorder: reorder::specs(d),
+            queues: queues::specs(d),
         }
     }
 
@@ -114,6 +118,36 @@ impl Renderer<'_> {
         let wide = self.scene.nodes8.is_some();
         let compact = self.opts.compact;
         let reorder = self.opts.reorder > 0;
+        let queue_sets = plan(shading).sets;
+        let info = d.info();
+        // `Auto` measures both designs where the choice cannot change the image and
+        // timestamps can tell them apart (`crate::design`); the CPU backend and the
+        // software driver would only pay for the partition and for more compilation.
+        let o = &self.opts;
+        let trial = queue_sets.len() > 1
+            && o.per_path_sampling()
+            && !o.coherent_glossy
+            && info.timestamps
+            && !info.software_driver
+            && info.backend != BackendKind::Cpu;
+        self.design = match o.shading {
+            Shading::Kernel => Choice::Fixed(false),
+            Shading::Queues => Choice::Fixed(true),
+            Shading::Auto if trial => Choice::Trial(Default::default()),
+            Shading::Auto => Choice::Fixed(false),
+        };
+        let (one, queued) = match self.design {
+            Choice::Fixed(q) => (!q, q),
+            Choice::Trial(_) => (true, true),
+        };
+        // The sets of the `extend`s this render may record: the scene's, one per queue.
+        let mut sets = Vec::new();
+        if one {
+            sets.push(shading);
+        }
+        if queued {
+            sets.extend(&queue_sets);
+        }
         // Every stage this render uses, built (IR, WGSL or SPIR-V) and compiled by the
         // driver on a thread of its own: `extend` takes the longest, and the others
         // finish beside it.
@@ -121,12 +155,6 @@ impl Renderer<'_> {
             Box<dyn FnOnce() -> Result<Vec<Arc<KernelArtifact>>, RenderError> + Send + 's>;
         let mut builds: Vec<Build<'_>> = vec![
             Box::new(|| Ok(vec![init_paths::artifact(&init_paths::spec(d, None))?])),
-            Box::new(|| {
-                Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
-                    &specs.extend,
-                    shading,
-                ))?])
-            }),
             Box::new(|| {
                 Ok(vec![if wide {
                     traverse8::artifact(&specs.traverse8)?
@@ -143,6 +171,17 @@ impl Renderer<'_> {
                     trace_shadow::artifact(&specs.shadow)?
                 }])
             }));
+        }
+        for &set in &sets {
+            let spec = &specs.extend;
+            builds.push(Box::new(move || {
+                Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
+                    spec, set,
+                ))?])
+            }));
+        }
+        if queued {
+            builds.push(Box::new(|| Ok(queues::artifacts(&specs.queues)?)));
         }
         if compact {
             builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
@@ -168,6 +207,14 @@ impl Renderer<'_> {
         })?;
         if reorder && self.paths.sort.is_none() {
             self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
+        }
+        // The queues' dispatches are sized for the group level's workgroup.
+        let wgs = specs.extend.workgroup_size;
+        let stale = |q: &QueueState| {
+            q.plan.table[queues::BLEND_ENTRY + 2] != wgs || q.plan.sets != queue_sets
+        };
+        if queued && self.paths.queues.as_ref().is_none_or(stale) {
+            self.paths.queues = Some(QueueState::new(d, self.frame.slots, shading, wgs)?);
         }
         self.startup.pipelines += started.elapsed();
         Ok(())

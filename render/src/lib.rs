@@ -5,6 +5,7 @@
 //! EXRs ([`provenance`] in the header, path counts per pixel) [`input`] reads back and
 //! [`merge`] combines; [`multi_device`] does both in one process, on several devices.
 
+mod design;
 mod error;
 pub mod gpu_scene;
 pub mod image;
@@ -18,6 +19,7 @@ mod options;
 pub mod output;
 mod paths;
 pub mod provenance;
+mod queues;
 pub mod renderer;
 pub mod roulette;
 pub mod shard;
@@ -30,7 +32,7 @@ pub use gpu_scene::{GpuScene, SceneBvh};
 pub use image::Image;
 pub use renderer::{
     Algorithm, Budget, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
-    RenderStats, Renderer,
+    RenderStats, Renderer, Shading,
 };
 pub use roulette::Roulette;
 pub use shard::Shard;

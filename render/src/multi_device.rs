@@ -83,11 +83,8 @@ pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
         all.iterations = all.iterations.max(s.iterations);
         all.completed_paths += s.completed_paths;
         all.rays += s.rays;
-        all.kernel.traverse += s.kernel.traverse;
-        all.kernel.extend += s.kernel.extend;
-        all.kernel.shadow += s.kernel.shadow;
-        all.kernel.compact += s.kernel.compact;
-        all.kernel.reorder += s.kernel.reorder;
+        all.kernel += s.kernel;
+        all.queued_iterations = all.queued_iterations.max(s.queued_iterations);
         all.wall = all.wall.max(s.wall);
         all.host.record += s.host.record;
         all.host.submit += s.host.submit;

@@ -116,6 +116,9 @@ pub struct RenderOptions {
     /// live rays by direction octant and origin cell before the traversal; 0 = never.
     /// The image is the same; only the traversal's order of rays changes.
     pub reorder: u32,
+    /// How shading is organised: one kernel, material queues, or the faster of the two
+    /// measured on the render (the default).
+    pub shading: Shading,
     /// Russian roulette continuation probability (the paper: 0.8).
     pub rr_continue: f32,
     /// Which Russian roulette ends paths: the paper's fixed `rr_continue` (the default), or
@@ -180,6 +183,25 @@ impl RenderOptions {
     }
 }
 
+/// How shading is organised (`crate::design`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shading {
+    /// Both designs measured on the render, batch by batch, and the faster kept, where
+    /// the choice cannot change the image: a GPU that times its dispatches, draws keyed
+    /// by path (`RenderOptions::per_path_sampling`) and a scene of more than one queue.
+    /// Elsewhere one kernel.
+    #[default]
+    Auto,
+    /// One `extend` built with the scene's kinds shades every ray.
+    Kernel,
+    /// Material queues (`cohort_kernels::queues`): after the traversal the live rays are
+    /// partitioned by the BSDF kind they hit, and one `extend` per kind, built with that
+    /// kind alone, shades its queue (pbrt-v4's wavefront organisation). Draws keyed by
+    /// path do not depend on it (the image is the same bit for bit); with coherent
+    /// groups, the groups form over the queues.
+    Queues,
+}
+
 impl Default for RenderOptions {
     fn default() -> Self {
         RenderOptions {
@@ -194,6 +216,7 @@ impl Default for RenderOptions {
             size: None,
             compact: true,
             reorder: 0,
+            shading: Shading::Auto,
             rr_continue: 0.8,
             roulette: Roulette::Fixed,
             whole_group_end: None,

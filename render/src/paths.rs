@@ -6,6 +6,7 @@ use cohort_kernels::{compact, reorder};
 use cohort_scenes::Camera;
 use glam::{UVec4, Vec4};
 
+use crate::queues::QueueState;
 use crate::{GpuScene, RenderError};
 
 /// Path state, structure of arrays, one entry per ray slot.
@@ -30,6 +31,8 @@ pub(crate) struct Paths {
     pub(crate) flags: GpuBuffer<u32>,
     /// Ray reordering's buffers, allocated by the first run that sorts.
     pub(crate) sort: Option<SortState>,
+    /// Material queues' buffers, allocated by the first run that shades over queues.
+    pub(crate) queues: Option<QueueState>,
     pub(crate) count: GpuBuffer<u32>,
     pub(crate) block_sums: GpuBuffer<u32>,
     pub(crate) total: GpuBuffer<u32>,
@@ -66,6 +69,7 @@ impl Paths {
             nee: device.alloc(n)?,
             flags: device.alloc(n)?,
             sort: None,
+            queues: None,
             count: device.upload(&[n as u32])?,
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,

@@ -20,6 +20,7 @@ use cohort_kernels::sampling::DiffuseSampler;
 use cohort_scenes::{morton_pixel_order, Camera, Scene};
 use glam::{Vec3, Vec4};
 
+use crate::design::Choice;
 use crate::iteration::{LabelledBatch, Stage, Wavefront};
 use crate::kernels::{Advance, Prepare};
 use crate::options::validate;
@@ -29,7 +30,7 @@ use crate::{GpuScene, Image};
 // The renderer's vocabulary, at the paths it has always had (`cohort_render::renderer::X`).
 pub use crate::error::RenderError;
 pub use crate::options::{
-    interleave_permutes, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions,
+    interleave_permutes, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Shading,
 };
 pub use crate::stats::{HostTimes, KernelTimes, RenderStats, Startup};
 
@@ -47,6 +48,8 @@ pub struct Renderer<'d> {
     /// The run in progress: `None` until `start`.
     run: Option<Run>,
     pub(crate) startup: Startup,
+    /// The design each run starts with (`crate::design`), chosen with the pipelines.
+    pub(crate) design: Choice,
 }
 
 /// What a run carries from one `advance` to the next.
@@ -59,6 +62,8 @@ struct Run {
     live: u64,
     /// GPU seconds of one iteration in the last submission: sizes the next one.
     per_iteration: Option<f64>,
+    /// The design of the run's batches, a trial until both are measured.
+    design: Choice,
 }
 
 /// A submitted batch of iterations and what its results are read into.
@@ -67,6 +72,9 @@ struct Pending<'d> {
     /// The stage of each dispatch, in order.
     stages: Vec<Stage>,
     iterations: u32,
+    /// Shaded over material queues, and the batch's index in the run's trial.
+    queued: bool,
+    trial_index: u32,
     counters: ReadBack<u32>,
 }
 
@@ -154,6 +162,7 @@ impl<'d> Renderer<'d> {
             camera,
             run: None,
             startup,
+            design: Choice::Fixed(false),
         };
         r.with_kernels(Prepare)?;
         Ok(r)
@@ -341,6 +350,7 @@ impl<'d> Renderer<'d> {
             cur: 0,
             live: (n - idle) as u64,
             per_iteration: None,
+            design: self.design.clone(),
         });
         Ok(())
     }
@@ -458,6 +468,7 @@ impl<'d> Renderer<'d> {
                     }
                 };
                 let recording = Instant::now();
+                let (queued_batch, trial_index) = run.design.next_batch();
                 let mut b = LabelledBatch::new(d.batch());
                 for k in 0..batch_iterations {
                     self.frame.iteration = run.stats.iterations + queued + k;
@@ -468,6 +479,7 @@ impl<'d> Renderer<'d> {
                         paths: p,
                         compaction: self.opts.compact,
                         reorder_every: self.opts.reorder,
+                        queues: queued_batch,
                     };
                     run.cur = wavefront.record_iteration::<S, E, I>(&mut b, run.cur)?;
                 }
@@ -482,6 +494,8 @@ impl<'d> Renderer<'d> {
                     submission,
                     stages,
                     iterations: batch_iterations,
+                    queued: queued_batch,
+                    trial_index,
                     counters,
                 });
             }
@@ -497,10 +511,23 @@ impl<'d> Renderer<'d> {
             // Every dispatch was labelled with its stage as it was recorded.
             debug_assert_eq!(oldest.stages.len(), completed.stats.len());
             let mut batch_time = Duration::ZERO;
+            let mut shading_time = Duration::ZERO;
             for (stage, t) in oldest.stages.iter().zip(&completed.stats) {
                 stats.kernel.add(*stage, ns(t));
                 batch_time += ns(t);
+                if matches!(stage, Stage::Queue | Stage::Extend) {
+                    shading_time += ns(t);
+                }
             }
+            if oldest.queued {
+                stats.queued_iterations += oldest.iterations;
+            }
+            run.design.observe(
+                oldest.queued,
+                oldest.trial_index,
+                shading_time,
+                oldest.iterations,
+            );
             run.per_iteration = Some(batch_time.as_secs_f64() / oldest.iterations as f64);
             stats.iterations += oldest.iterations;
             // Slots that finished inside a submission are counted as live until its

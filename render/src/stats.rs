@@ -14,10 +14,12 @@ pub struct KernelTimes {
     pub compact: Duration,
     /// Sorting the rays before the traversal (`RenderOptions::reorder`).
     pub reorder: Duration,
+    /// Partitioning the hits into material queues (`RenderOptions::shading`).
+    pub queue: Duration,
 }
 impl KernelTimes {
     pub fn total(&self) -> Duration {
-        self.traverse + self.extend + self.shadow + self.compact + self.reorder
+        self.traverse + self.extend + self.shadow + self.compact + self.reorder + self.queue
     }
     /// Adds `t` to the time of `stage`.
     pub(crate) fn add(&mut self, stage: Stage, t: Duration) {
@@ -27,7 +29,28 @@ impl KernelTimes {
             Stage::Shadow => self.shadow += t,
             Stage::Compact => self.compact += t,
             Stage::Reorder => self.reorder += t,
+            Stage::Queue => self.queue += t,
         }
+    }
+}
+
+/// Stage by stage: what several devices' times add up to.
+impl std::ops::AddAssign for KernelTimes {
+    fn add_assign(&mut self, o: KernelTimes) {
+        let KernelTimes {
+            traverse,
+            extend,
+            shadow,
+            compact,
+            reorder,
+            queue,
+        } = o;
+        self.traverse += traverse;
+        self.extend += extend;
+        self.shadow += shadow;
+        self.compact += compact;
+        self.reorder += reorder;
+        self.queue += queue;
     }
 }
 
@@ -42,6 +65,9 @@ pub struct RenderStats {
     pub pixels: u64,
     /// Ray slots of the wavefront: paths in flight at once (`RenderOptions::wavefront`).
     pub slots: u64,
+    /// Iterations shaded over material queues (`RenderOptions::shading`); the others
+    /// were shaded by one kernel.
+    pub queued_iterations: u32,
     /// Where the host's time went: recording batches, submitting them, and waiting for
     /// the oldest one in flight (the GPU is busy then; recording while it is idle is
     /// what makes the wall time exceed the kernel time).

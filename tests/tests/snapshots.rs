@@ -86,9 +86,10 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::integrator::{Implicit, NextEvent};
     use cohort_kernels::layout::DIFFUSE;
     use cohort_kernels::path_end::{EachPath, WholeGroup};
+    use cohort_kernels::queues::{queue_count, queue_offsets, queue_scatter};
     use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
-    use cohort_kernels::shading::{kind_bit, SHADES_ALL};
+    use cohort_kernels::shading::{kind_bit, queue_set, SHADES_ALL};
     use cohort_kernels::traverse::{trace_shadow, traverse};
     use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
     fn variant(
@@ -183,6 +184,25 @@ fn renderer_variants() -> Vec<variants::Variant> {
             Group::Thread,
             bin_scatter::build,
         ),
+        // Material queues (`cohort render --shading-queues`).
+        variant(
+            "queue_count",
+            &queue_count::INFO,
+            Group::Thread,
+            queue_count::build,
+        ),
+        variant(
+            "queue_offsets",
+            &queue_offsets::INFO,
+            Group::Thread,
+            queue_offsets::build,
+        ),
+        variant(
+            "queue_scatter",
+            &queue_scatter::INFO,
+            Group::Thread,
+            queue_scatter::build,
+        ),
         // The viewer's tone mapping (`cohort view`).
         variant("display", &display::INFO, Group::Thread, display::build),
         // The default render (independent cosine sampling, light sampling) and the paper's
@@ -201,6 +221,15 @@ fn renderer_variants() -> Vec<variants::Variant> {
             &extend::INFO,
             Group::Thread,
             &[kind_bit(DIFFUSE)],
+            extend::build::<Cosine, EachPath, NextEvent>,
+        ),
+        // The diffuse queue's `extend` (`--shading-queues`): the same kernel, reading its
+        // rays from queue 1.
+        specialized(
+            "extend_cosine_nee_diffuse_queue",
+            &extend::INFO,
+            Group::Thread,
+            &[queue_set(kind_bit(DIFFUSE), 1)],
             extend::build::<Cosine, EachPath, NextEvent>,
         ),
         specialized(

@@ -284,6 +284,9 @@ impl App {
             if !k.reorder.is_zero() {
                 lines.push(Line::plain(format!(" ms: sort {:.0}", ms(k.reorder))));
             }
+            if !k.queue.is_zero() {
+                lines.push(Line::plain(format!(" ms: queues {:.0}", ms(k.queue))));
+            }
         }
         lines.push(Line::plain(format!(
             "display kernel {:.2} ms per frame",
