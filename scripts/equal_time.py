@@ -4,7 +4,13 @@ the same GPU in the same run; RMS error of every image against Mitsuba's own lon
 versus time. Writes equal_time.csv, equal_time.md and equal_time.png into --out.
 
 RMS is relative: sqrt(mean over pixels and channels of (img - ref)^2) / mean(ref), as
-`cohort figures` computes it. Times: Mitsuba's is the wall time of `mi.render` plus the
+`cohort figures` computes it. References: a long Mitsuba render and a long Cohort render, each
+with seeds no timed render uses. With `--reference cross` (the default) each renderer's error
+is taken against the other's reference, so that no render shares random numbers with its
+reference: Mitsuba's timed renders against its own reference reach an error floor below that
+reference's own noise (they are correlated with it, whatever the seeds), which understates
+Mitsuba's error at large sample counts. `--reference mitsuba` takes both against Mitsuba's, as
+before 2026-11-28; the CSV has both errors (`rms_vs_mitsuba_ref`, `rms_vs_cohort_ref`). Times: Mitsuba's is the wall time of `mi.render` plus the
 synchronisation that waits for the GPU (after an untimed warm-up render, so JIT compilation
 is cached); Cohort's is its render wall time (`wall_s` of --stats, the loop that keeps the
 GPU busy, after scene load and pipeline creation), and the whole process wall time is
@@ -12,7 +18,7 @@ recorded beside it.
 
 usage: equal_time.py --scenes DIR --cohort bin/cohort [--variant cuda_ad_rgb] [--size 1024]
        [--ref-spp 4096,2048] [--mitsuba-spp 32,64,128,256,512] [--cohort-paths 32,64,128,256,512,1024]
-       [--cohort-args "--integrator nee"] [--target-spp 256] [--out DIR]
+       [--cohort-args "--integrator nee"] [--target-spp 256] [--reference cross|mitsuba] [--out DIR]
 """
 import argparse, csv, json, math, os, shlex, subprocess, sys, tempfile, time
 
@@ -52,6 +58,19 @@ def read_exr(mi, path):
     return np.array(mi.Bitmap(path))[:, :, :3].astype(np.float64)
 
 
+def without_seed(args):
+    """Cohort options less any `--seed N` (the reference has a seed of its own)."""
+    out, skip = [], False
+    for x in args:
+        if skip:
+            skip = False
+        elif x == "--seed":
+            skip = True
+        elif not x.startswith("--seed="):
+            out.append(x)
+    return out
+
+
 def interpolate_time(points, target):
     """Time at which the (time, rms) curve reaches `target` (log-log interpolation)."""
     pts = sorted(points)
@@ -76,6 +95,8 @@ def main():
     ap.add_argument("--cohort-paths", default="32,64,128,256,512,1024")
     ap.add_argument("--cohort-args", default="--integrator nee", help="Cohort options; several configurations separated by ';'")
     ap.add_argument("--target-spp", type=int, default=256, help="the ratio is taken at the RMS of Mitsuba's render at this many spp")
+    ap.add_argument("--reference", choices=["cross", "mitsuba"], default="cross",
+                    help="cross: each renderer against the other's reference; mitsuba: both against Mitsuba's")
     ap.add_argument("--out", default=os.environ.get("OUT", "equal-time-out"))
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -99,9 +120,24 @@ def main():
             acc = img if acc is None else acc + img
         ref = acc / passes
         print(f"{name}: reference {spp_ref} spp in {time.perf_counter() - t0:.1f} s, mean {ref.mean():.4f}", flush=True)
+        with tempfile.TemporaryDirectory() as td:
+            # Cohort's reference: the first configuration, as many paths, a seed of its own.
+            exr = os.path.join(td, "ref.exr")
+            cmd = [a.cohort, "render", "--scene", xml, "--width", str(a.size), "--height", str(a.size), "--paths", str(spp_ref),
+                   "--seed", "1000003", "--out", exr, "--png", os.path.join(td, "ref.png")] + without_seed(shlex.split(a.cohort_args.split(";")[0]))
+            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+            cref = read_exr(mi, exr)
+        print(f"{name}: Cohort reference {spp_ref} paths, mean {cref.mean():.4f} (Mitsuba's / Cohort's {ref.mean() / cref.mean():.5f})", flush=True)
+
+        def errors(img, own):
+            e = dict(rms_vs_mitsuba_ref=rms(img, ref), rms_vs_cohort_ref=rms(img, cref))
+            other = "rms_vs_cohort_ref" if own == "mitsuba" else "rms_vs_mitsuba_ref"
+            e["rms"] = e[other] if a.reference == "cross" else e["rms_vs_mitsuba_ref"]
+            return e
+
         for spp in [int(x) for x in a.mitsuba_spp.split(",")]:
             img, t = mitsuba_render(mi, dr, scene, spp, 1 + spp)
-            rows.append(dict(scene=name, renderer="mitsuba " + a.variant, budget=f"{spp} spp", seconds=t, process_seconds=t, rms=rms(img, ref), mean=img.mean()))
+            rows.append(dict(scene=name, renderer="mitsuba " + a.variant, budget=f"{spp} spp", seconds=t, process_seconds=t, mean=img.mean(), **errors(img, "mitsuba")))
             print(rows[-1], flush=True)
         del scene
         with tempfile.TemporaryDirectory() as td:
@@ -116,17 +152,18 @@ def main():
                 s = json.load(open(stats))
                 img = read_exr(mi, exr)
                 rows.append(dict(scene=name, renderer="cohort " + cargs.strip(), budget=f"{paths} paths", seconds=s["wall_s"], process_seconds=pt,
-                                 kernel_seconds=s["kernel_ms"]["total"] / 1e3, rms=rms(img, ref), mean=img.mean()))
+                                 kernel_seconds=s["kernel_ms"]["total"] / 1e3, mean=img.mean(), **errors(img, "cohort")))
                 print(rows[-1], flush=True)
-    keys = ["scene", "renderer", "budget", "seconds", "process_seconds", "kernel_seconds", "rms", "mean"]
+    keys = ["scene", "renderer", "budget", "seconds", "process_seconds", "kernel_seconds", "rms", "rms_vs_mitsuba_ref", "rms_vs_cohort_ref", "mean"]
     with open(os.path.join(a.out, "equal_time.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
         for r in rows:
             w.writerow({k: r.get(k, "") for k in keys})
-    md = ["| scene | renderer | budget | render s | process s | RMS % |", "|---|---|---|---:|---:|---:|"]
+    md = [f"RMS % against the {'other renderer' if a.reference == 'cross' else 'Mitsuba'}'s reference (both in the last two columns)", "",
+          "| scene | renderer | budget | render s | process s | RMS % | vs Mitsuba's ref | vs Cohort's ref |", "|---|---|---|---:|---:|---:|---:|---:|"]
     for r in rows:
-        md.append(f"| {r['scene']} | {r['renderer']} | {r['budget']} | {r['seconds']:.3f} | {r['process_seconds']:.3f} | {100 * r['rms']:.2f} |")
+        md.append(f"| {r['scene']} | {r['renderer']} | {r['budget']} | {r['seconds']:.3f} | {r['process_seconds']:.3f} | {100 * r['rms']:.2f} | {100 * r['rms_vs_mitsuba_ref']:.2f} | {100 * r['rms_vs_cohort_ref']:.2f} |")
     md.append("")
     md.append(f"| scene | Cohort configuration | Mitsuba {a.target_spp}-spp RMS % | Mitsuba s | Cohort s to that RMS (render) | ratio | Cohort s (process) | ratio |")
     md.append("|---|---|---:|---:|---:|---:|---:|---:|")
