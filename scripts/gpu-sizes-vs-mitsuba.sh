@@ -7,7 +7,9 @@
 # Needs: $B/cohort or $B/cohort.xz (release, stripped), $SITE (Mitsuba 3.9.1 + Dr.Jit cp312 wheels
 # unpacked and trimmed to cuda_ad_rgb and the scenes' plugins, as a tar.xz of a `site`
 # folder), $SCENES/{cornell-box,stanford-like} (or the scene folders named in $NAMES,
-# comma-separated, e.g. NAMES=bunny-box SIZES=512 for the scanned mesh). On the device:
+# comma-separated, e.g. NAMES=bunny-box SIZES=512 for the scanned mesh). SEEDS (default 1):
+# Cohort's seeds, one configuration each, since one seed's RMS error moves by several percent
+# (BENCHMARKS.md, the scanned mesh over five seeds). On the device:
 #   OUT=$OUT B=bin-gpu SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
@@ -33,6 +35,11 @@ export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv | tee "$OUT/gpu.txt"
 nvidia-smi --query-gpu=timestamp,clocks.sm,utilization.gpu --format=csv -lms 1000 > "$OUT/clocks.csv" &
 SMI=$!
+# One configuration per seed, then one slot per pixel (the first seed).
+SEEDS="${SEEDS:-1}"
+configs=""
+for seed in $SEEDS; do configs="$configs--integrator nee --backend vulkan --seed $seed;"; done
+configs="$configs--integrator nee --backend vulkan --wavefront 1 --seed ${SEEDS%% *}"
 for size in ${SIZES:-128 256 512 1024}; do
   case $size in
     128) ref=65536,32768; mspp=64,128,256,512,1024,2048; cpaths=64,128,256,512,1024,2048,4096; target=1024 ;;
@@ -41,7 +48,7 @@ for size in ${SIZES:-128 256 512 1024}; do
   esac
   python3 scripts/equal_time.py --scenes "$SCENES" --names "${NAMES:-cornell-box,stanford-like}" --cohort "$B/cohort" --variant cuda_ad_rgb --size $size \
     --ref-spp $ref --mitsuba-spp $mspp --cohort-paths $cpaths --target-spp $target \
-    --cohort-args "--integrator nee --backend vulkan;--integrator nee --backend vulkan --wavefront 1" \
+    --cohort-args "$configs" \
     --out "$OUT/size$size" 2>&1 | grep -vE "^\{" | tee "$OUT/size$size.log"
 done
 kill $SMI
