@@ -12,7 +12,9 @@ and stanford-like at 512x512: the two references' means agree to 0.025 % and the
 against them differ by at most 0.2 points). `--reference mitsuba` takes both against
 Mitsuba's, as before 2026-11-28; the CSV has both errors (`rms_vs_mitsuba_ref`,
 `rms_vs_cohort_ref`). RMS error is dominated by a few noisy pixels, so one seed's error moves
-by several percent: give Cohort several seeds (`--seed N` in configurations separated by `;`). Times: Mitsuba's is the wall time of `mi.render` plus the
+by several percent: give Cohort several seeds (`--seed N` in configurations separated by `;`)
+and Mitsuba too (`--mitsuba-seeds 1,2,3`: the target error is then the RMS over its seeds, at
+the mean of their times). Times: Mitsuba's is the wall time of `mi.render` plus the
 synchronisation that waits for the GPU (after an untimed warm-up render, so JIT compilation
 is cached); Cohort's is its render wall time (`wall_s` of --stats, the loop that keeps the
 GPU busy, after scene load and pipeline creation), and the whole process wall time is
@@ -20,7 +22,8 @@ recorded beside it.
 
 usage: equal_time.py --scenes DIR --cohort bin/cohort [--variant cuda_ad_rgb] [--size 1024]
        [--ref-spp 4096,2048] [--mitsuba-spp 32,64,128,256,512] [--cohort-paths 32,64,128,256,512,1024]
-       [--cohort-args "--integrator nee"] [--target-spp 256] [--reference cross|mitsuba] [--out DIR]
+       [--cohort-args "--integrator nee"] [--target-spp 256] [--reference cross|mitsuba]
+       [--mitsuba-seeds 1,2,3] [--out DIR]
 """
 import argparse, csv, json, math, os, shlex, subprocess, sys, tempfile, time
 
@@ -97,6 +100,7 @@ def main():
     ap.add_argument("--cohort-paths", default="32,64,128,256,512,1024")
     ap.add_argument("--cohort-args", default="--integrator nee", help="Cohort options; several configurations separated by ';'")
     ap.add_argument("--target-spp", type=int, default=256, help="the ratio is taken at the RMS of Mitsuba's render at this many spp")
+    ap.add_argument("--mitsuba-seeds", default="1", help="Mitsuba's timed renders for each of these seeds (1..999); the target is over all")
     ap.add_argument("--reference", choices=["cross", "mitsuba"], default="cross",
                     help="cross: each renderer against the other's reference; mitsuba: both against Mitsuba's")
     ap.add_argument("--out", default=os.environ.get("OUT", "equal-time-out"))
@@ -137,10 +141,14 @@ def main():
             e["rms"] = e[other] if a.reference == "cross" else e["rms_vs_mitsuba_ref"]
             return e
 
-        for spp in [int(x) for x in a.mitsuba_spp.split(",")]:
-            img, t = mitsuba_render(mi, dr, scene, spp, 1 + spp)
-            rows.append(dict(scene=name, renderer="mitsuba " + a.variant, budget=f"{spp} spp", seconds=t, process_seconds=t, mean=img.mean(), **errors(img, "mitsuba")))
-            print(rows[-1], flush=True)
+        seeds = [int(x) for x in a.mitsuba_seeds.split(",")]
+        for k in seeds:
+            label = "mitsuba " + a.variant + (f" seed {k}" if len(seeds) > 1 else "")
+            for spp in [int(x) for x in a.mitsuba_spp.split(",")]:
+                # Seed 1 keeps the seeds of the figures before --mitsuba-seeds (1 + spp).
+                img, t = mitsuba_render(mi, dr, scene, spp, (k - 1) * 1000 + 1 + spp)
+                rows.append(dict(scene=name, renderer=label, budget=f"{spp} spp", seconds=t, process_seconds=t, mean=img.mean(), **errors(img, "mitsuba")))
+                print(rows[-1], flush=True)
         del scene
         with tempfile.TemporaryDirectory() as td:
           for cargs in a.cohort_args.split(";"):
@@ -175,7 +183,9 @@ def main():
         m256 = [r for r in m if r["budget"] == f"{a.target_spp} spp"]
         if not m256:
             continue
-        target, tm = m256[0]["rms"], m256[0]["seconds"]
+        # Over Mitsuba's seeds: the RMS of their errors, the mean of their times.
+        target = math.sqrt(sum(r["rms"] ** 2 for r in m256) / len(m256))
+        tm = sum(r["seconds"] for r in m256) / len(m256)
         tc = interpolate_time([(r["seconds"], r["rms"]) for r in c], target)
         tp = interpolate_time([(r["process_seconds"], r["rms"]) for r in c], target)
         fmt = lambda t: "not reached" if t is None else f"{t:.3f}"

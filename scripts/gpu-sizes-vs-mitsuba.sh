@@ -9,7 +9,8 @@
 # folder), $SCENES/{cornell-box,stanford-like} (or the scene folders named in $NAMES,
 # comma-separated, e.g. NAMES=bunny-box SIZES=512 for the scanned mesh). SEEDS (default 1):
 # Cohort's seeds, one configuration each, since one seed's RMS error moves by several percent
-# (BENCHMARKS.md, the scanned mesh over five seeds). On the device:
+# (BENCHMARKS.md, the scanned mesh over five seeds); MITSUBA_SEEDS (default 1, comma-separated):
+# Mitsuba's, whose target error is then taken over all of them. On the device:
 #   OUT=$OUT B=bin-gpu SITE=gpu-mitsuba/site.tar.xz scripts/gpu-sizes-vs-mitsuba.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
@@ -48,7 +49,7 @@ for size in ${SIZES:-128 256 512 1024}; do
   esac
   python3 scripts/equal_time.py --scenes "$SCENES" --names "${NAMES:-cornell-box,stanford-like}" --cohort "$B/cohort" --variant cuda_ad_rgb --size $size \
     --ref-spp $ref --mitsuba-spp $mspp --cohort-paths $cpaths --target-spp $target \
-    --cohort-args "$configs" \
+    --cohort-args "$configs" --mitsuba-seeds "${MITSUBA_SEEDS:-1}" \
     --out "$OUT/size$size" 2>&1 | grep -vE "^\{" | tee "$OUT/size$size.log"
 done
 kill $SMI
