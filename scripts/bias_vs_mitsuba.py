@@ -13,30 +13,13 @@ usage: bias_vs_mitsuba.py --scenes DIR --names cornell-box,bunny-box --cohort bi
        [--size 256] [--spp 16384] [--variant cuda_ad_rgb] [--cohort-args "--backend vulkan"]
        [--out DIR]
 """
-import argparse, os, re, shlex, subprocess, sys, tempfile
+import argparse, os, shlex, subprocess, sys, tempfile
 
 import numpy as np
 
-
-def load_scene(mi, path, size):
-    # Override the film size through a copy of the XML beside the original, so relative
-    # mesh paths still resolve.
-    text = open(path).read()
-    text = re.sub(r'(<integer name="width" value=")\d+', r'\g<1>%d' % size, text)
-    text = re.sub(r'(<integer name="height" value=")\d+', r'\g<1>%d' % size, text)
-    tmp = os.path.join(os.path.dirname(os.path.abspath(path)), ".bias_scene.xml")
-    open(tmp, "w").write(text)
-    try:
-        return mi.load_file(tmp)
-    finally:
-        os.remove(tmp)
-
-
-def mitsuba(mi, dr, scene, spp, seed):
-    img = mi.render(scene, spp=spp, seed=seed)
-    dr.eval(img)
-    dr.sync_thread()
-    return np.array(img)[:, :, :3].astype(np.float64)
+# The scene loading and the timed Mitsuba render of the equal-time benchmark, beside this file.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from equal_time import load_scene, mitsuba_render, read_exr  # noqa: E402
 
 
 def cohort(mi, binary, path, size, spp, seed, extra, tmp):
@@ -47,7 +30,7 @@ def cohort(mi, binary, path, size, spp, seed, extra, tmp):
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit("cohort failed: %s\n%s" % (" ".join(cmd), r.stderr))
-    return np.array(mi.Bitmap(exr))[:, :, :3].astype(np.float64)
+    return read_exr(mi, exr)
 
 
 def blocks(img, b):
@@ -73,9 +56,9 @@ def main():
     b = 16
     for name in a.names.split(","):
         path = os.path.join(a.scenes, name, "scene.xml")
-        scene = load_scene(mi, path, a.size)
+        scene = load_scene(mi, path, a.size, a.spp)
         with tempfile.TemporaryDirectory() as tmp:
-            m1, m2 = (mitsuba(mi, dr, scene, a.spp, s) for s in (1, 2))
+            m1, m2 = (mitsuba_render(mi, dr, scene, a.spp, s)[0] for s in (1, 2))
             c1, c2 = (cohort(mi, a.cohort, path, a.size, a.spp, s, a.cohort_args, tmp) for s in (1, 2))
         mean = m1.mean()
         rel = lambda x: float(np.sqrt(np.mean(x ** 2)) / mean)
