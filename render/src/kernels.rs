@@ -126,7 +126,6 @@ impl Renderer<'_> {
         let o = &self.opts;
         let trial = queue_sets.len() > 1
             && o.per_path_sampling()
-            && !o.coherent_glossy
             && info.timestamps
             && !info.software_driver
             && info.backend != BackendKind::Cpu;
