@@ -30,6 +30,9 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
 /// grid) and every ray of the group samples with it.
 #[kernel_trait]
 pub trait DiffuseSampler {
+    /// Whether `sample` reads `group_value`: where it does not, `extend` leaves the
+    /// group's draw out (a sampler that shares nothing sets it to false).
+    const GROUP_VALUE: bool = true;
     /// The group's draw from the random stream `key` (e.g. a hemisphere patch index).
     fn group_value(key: u32, patches_n: u32) -> u32;
     /// World direction for a bounce at shading normal `n` from random numbers `u`, in
@@ -43,6 +46,7 @@ pub struct Cosine;
 
 #[kernel_impl]
 impl DiffuseSampler for Cosine {
+    const GROUP_VALUE: bool = false;
     fn group_value(_key: u32, _patches_n: u32) -> u32 {
         0
     }
