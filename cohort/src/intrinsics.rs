@@ -110,22 +110,14 @@ pub mod workgroup_uniform_load {
 }
 
 /// The value the group's first invocation computes with `leader(group index)`, given to
-/// every invocation of the group (its `group` level). Called directly on the host every
-/// invocation runs alone and computes it itself.
+/// every invocation of the group (its `group` level). On the host and the CPU backend no
+/// invocation waits for another: the closure reads only the group's index, uniform and
+/// `#[specialize]` values and constants (the macro checks it), so the value can be computed
+/// by whichever member runs first (`cpu::group_value`, once per group and workgroup) or by
+/// each invocation called directly.
 #[track_caller]
 pub fn group_share<T: Copy>(leader: impl FnOnce(u32) -> T) -> T {
-    let Some(lane) = cpu::lane() else {
-        return leader(crate::host::current_group());
-    };
-    let (scope, first) = match lane.level {
-        GroupLevel::Thread | GroupLevel::Grid => return leader(lane.group),
-        GroupLevel::Warp => (Scope::Subgroup, lane.subgroup_lane == 0),
-        GroupLevel::Block => (Scope::Workgroup, lane.local_index == 0),
-    };
-    let mine = first.then(|| leader(lane.group));
-    cpu::exchange(scope, mine, |v| v.get(0))
-        .flatten()
-        .expect("group_share: the group's first invocation returned before reaching the call")
+    cpu::group_value(leader, crate::host::current_group)
 }
 pub mod group_share {
     /// Whether a call must be reached by every invocation of its group (checked at the

@@ -66,8 +66,9 @@ pub struct CompiledKernel {
     pub features: KernelFeatures,
     /// The kernel's `print!`-family calls, indexed by the site number its records carry.
     pub prints: Vec<PrintSite>,
-    /// Whether invocations wait for each other: a barrier or a subgroup operation anywhere
-    /// in the module (group operations above thread level lower to these).
+    /// Whether invocations wait for each other on the CPU backend: a barrier, a subgroup
+    /// operation or `group_any` above thread level (`group_share` is not one there: each
+    /// invocation computes its group's value, see `ir::builder::Ctx::host_waits`).
     pub synchronises: bool,
     /// Where the kernel is defined, for messages about it (a lowering failure is a
     /// compiler bug reported there).
@@ -131,7 +132,7 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<CompiledKernel, Comp
             required_subgroup_size: built.spec.required_subgroup_size,
         },
         prints: built.prints.clone(),
-        synchronises: synchronises(&module),
+        synchronises: built.host_waits,
         location: format!(
             "{}:{}:{}",
             built.info.file, built.info.line, built.info.column
@@ -142,30 +143,6 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<CompiledKernel, Comp
         module,
         info,
     })
-}
-
-/// Whether invocations of the kernel wait for each other: a barrier or a subgroup
-/// operation anywhere in the module (group operations above thread level lower to these).
-fn synchronises(module: &naga::Module) -> bool {
-    fn block(b: &naga::Block) -> bool {
-        use naga::Statement as S;
-        b.iter().any(|s| match s {
-            S::ControlBarrier(_)
-            | S::WorkGroupUniformLoad { .. }
-            | S::SubgroupBallot { .. }
-            | S::SubgroupCollectiveOperation { .. }
-            | S::SubgroupGather { .. } => true,
-            S::Block(b) => block(b),
-            S::If { accept, reject, .. } => block(accept) || block(reject),
-            S::Switch { cases, .. } => cases.iter().any(|c| block(&c.body)),
-            S::Loop {
-                body, continuing, ..
-            } => block(body) || block(continuing),
-            _ => false,
-        })
-    }
-    module.functions.iter().any(|(_, f)| block(&f.body))
-        || module.entry_points.iter().any(|e| block(&e.function.body))
 }
 
 /// Bytes of the module's workgroup variables (naga's layout: each variable aligned).

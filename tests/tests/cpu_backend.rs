@@ -139,3 +139,38 @@ fn the_cpu_backend_describes_itself() {
         info.adapter_name
     );
 }
+
+/// Which kernels the CPU backend runs as coroutines: those whose invocations wait for each
+/// other (barriers, subgroup operations, `group_any` above thread level). `group_share`
+/// alone makes none wait at any level, because each invocation computes its group's
+/// value; a coherent kernel that only shares values runs as a plain loop.
+#[test]
+fn only_waiting_operations_make_a_kernel_synchronise() {
+    use cohort_tests::kernels::group_pick::group_pick;
+    use cohort_tests::kernels::group_vote::group_vote;
+    let synchronises = |built: &cohort::ir::BuiltKernel| {
+        cohort::emit::emit(built)
+            .expect("the kernel builds")
+            .compiled
+            .synchronises
+    };
+    for group in [Group::Thread, Group::Warp, Group::Block(256), Group::Grid] {
+        let share = cohort::Spec::portable(&group_pick::INFO, group);
+        assert!(
+            !synchronises(&group_pick::build(&share)),
+            "group_share at {group:?}"
+        );
+        if group != Group::Grid {
+            let vote = cohort::Spec::portable(&group_vote::INFO, group);
+            assert_eq!(
+                synchronises(&group_vote::build(&vote)),
+                group != Group::Thread,
+                "group_any at {group:?}"
+            );
+        }
+    }
+    let barriers = cohort::Spec::portable(&panics_between_barriers::INFO, Group::Thread);
+    assert!(synchronises(&panics_between_barriers::build(&barriers)));
+    let subgroups = cohort::Spec::portable(&divergent_subgroups::INFO, Group::Thread);
+    assert!(synchronises(&divergent_subgroups::build(&subgroups)));
+}

@@ -7,7 +7,7 @@
 //! loop that the others have left are behind in the source, and on a GPU they run first,
 //! with only themselves active. Lanes that finished take no part, as inactive lanes on a
 //! GPU. When no subgroup operation is pending, every lane still running must wait at the
-//! same workgroup-wide sync point (a barrier, or `group_share` / `group_any` at block
+//! same workgroup-wide sync point (a barrier, or `group_any` at block
 //! level), and all are released together; anything else is reported as the uniformity
 //! error it is (docs/LANGUAGE.md, section 11).
 
@@ -17,6 +17,7 @@ use std::panic::Location;
 use corosensei::stack::DefaultStack;
 use corosensei::{Coroutine, CoroutineResult, Yielder};
 
+use super::share::ShareCache;
 use super::{Builtins, GroupLevel, HostBuf, HostKernel, LaneArgs, SUBGROUP_WIDTH};
 
 /// Which invocations a sync point joins.
@@ -29,7 +30,7 @@ pub enum Scope {
     Workgroup,
 }
 
-/// The largest value one lane can post (a `group_share` of a larger struct is refused
+/// The largest value one lane can post (a subgroup operation on a larger struct is refused
 /// with a panic naming the size).
 const SLOT_BYTES: usize = 256;
 /// Each lane's stack. Kernels keep their data in registers-sized locals and small arrays;
@@ -103,6 +104,8 @@ struct LaneCtx {
     /// Null while the kernel runs without coroutines.
     yielder: Cell<*const Yielder<(), Park>>,
     shared: *const Shared,
+    /// The `group_share` values computed in this workgroup so far.
+    shares: ShareCache,
 }
 
 /// The invocations one call of a kernel's host form runs: consecutive local indices of
@@ -194,6 +197,26 @@ pub fn lane() -> Option<Lane> {
     let p = CURRENT.with(|c| c.get());
     // SAFETY: set only while the context it points to is alive.
     (!p.is_null()).then(|| unsafe { (*p).lane.get() })
+}
+
+/// The value of `group_share` at its call site for the running invocation's group:
+/// computed by `leader` with the group's index once per group in a workgroup, where
+/// invocations share it (above thread level). Where the calling thread runs no lane of the
+/// CPU backend (a kernel called directly on the host), `leader(alone())`.
+#[track_caller]
+pub fn group_value<T: Copy>(leader: impl FnOnce(u32) -> T, alone: impl FnOnce() -> u32) -> T {
+    let site = Location::caller();
+    let p = CURRENT.with(|c| c.get());
+    if p.is_null() {
+        return leader(alone());
+    }
+    // SAFETY: set only while the context it points to is alive.
+    let ctx = unsafe { &*p };
+    let lane = ctx.lane.get();
+    match lane.level {
+        GroupLevel::Thread => leader(lane.group),
+        _ => ctx.shares.get_or(site, lane.group, leader),
+    }
 }
 
 /// The values the lanes of one release posted, as the lane reading them sees them.
@@ -394,6 +417,7 @@ pub(crate) fn run_workgroup(launch: &Launch<'_>, linear: u32, scratch: &mut Scra
         subgroup: local / SUBGROUP_WIDTH,
         yielder: Cell::new(std::ptr::null()),
         shared,
+        shares: ShareCache::new(),
     };
     let _clear = ClearCurrent;
 

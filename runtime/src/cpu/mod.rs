@@ -4,7 +4,7 @@
 //!
 //! The backend runs each kernel's plain Rust function, compiled natively. Workgroups run in
 //! parallel on every core. Within a workgroup, a kernel that synchronises (barriers,
-//! subgroup operations, `group_share` / `group_any` above thread level) runs each
+//! subgroup operations, `group_any` above thread level) runs each
 //! invocation as a coroutine on its own stack: an invocation that reaches a sync point
 //! posts its value and parks, and `lanes` releases the invocations that belong together
 //! once all of them have arrived (the work-item loop of CPU OpenCL compilers, with the
@@ -15,8 +15,9 @@
 //! generated code.
 
 mod lanes;
+mod share;
 
-pub use lanes::{exchange, lane, Lane, Lanes, Scope, View};
+pub use lanes::{exchange, group_value, lane, Lane, Lanes, Scope, View};
 pub(crate) use lanes::{run_workgroup, Launch, Scratch};
 
 /// The subgroup width the CPU backend gives kernels (the width of an NVIDIA warp, so that
@@ -43,8 +44,10 @@ pub struct HostKernel {
     /// Size and alignment of each `#[workgroup]` parameter, in parameter order.
     pub workgroup_vars: fn() -> Vec<(usize, usize)>,
     pub group: GroupLevel,
-    /// Whether invocations wait for each other (barriers, subgroup or group operations):
-    /// if not, the backend runs them one after another without coroutines.
+    /// Whether invocations wait for each other (barriers, subgroup operations,
+    /// `group_any` above thread level): if not, the backend runs them one after another
+    /// without coroutines. `group_share` does not wait: each invocation computes its
+    /// group's value.
     pub synchronises: bool,
     /// The values of the kernel's `#[specialize]` parameters (`Spec::constants`).
     pub constants: [u32; cohort_compiler::spec::MAX_CONSTANTS],
