@@ -309,9 +309,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // The group's shared draws come first, in uniform control flow: the patch of
     // coherent sampling and the group's Russian-roulette number. They are keyed by
     // iteration, not by path, so each shard of a render draws them from its own seed.
-    // Each is drawn only where the configuration reads it (the conditions are uniform):
-    // on the CPU backend the four draws cost 18 % of a `normal` render's time when made
-    // and thrown away.
+    // The patch is drawn only for a sampler that reads it (`DiffuseSampler::GROUP_VALUE`).
     let mut shared_patch = 0u32;
     if S::GROUP_VALUE {
         shared_patch = group_share(|group| {
@@ -321,22 +319,24 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             )
         });
     }
-    // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
+    // The configuration's own group draws: the Russian-roulette number of `_rr` and of
+    // whole-group ends, the cell of coherent glossy sampling and the light draw of
+    // coherent light sampling. The renderer sets `SHADES_GROUP_DRAWS` where a frame flag
+    // reads one (`crate::shading::group_draws`), so elsewhere they are left out when the
+    // kernel is built: behind the flags alone they cost the CPU backend 16 % of a `normal`
+    // render, and warp groups on an H200 3-6 % when tested at run time.
     let mut shared_rr = Vec2::new(0.0, 0.0);
-    if E::WHOLE_GROUP || f.group_rr != 0 {
+    let mut shared_cell = 0u32;
+    let mut shared_light = Vec2::new(0.0, 0.0);
+    if E::WHOLE_GROUP || shading & SHADES_GROUP_DRAWS != 0 {
+        // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
         shared_rr = group_share(|group| {
             let k = stream(f.group_seed ^ 0x2b5e, group, f.iteration, 0x7a11);
             Vec2::new(uniform(k, 0), uniform(k, 1))
         });
-    }
-    let mut shared_cell = 0u32;
-    if f.coherent_glossy != 0 {
         shared_cell =
             group_share(|group| hash(stream(f.group_seed ^ 0x61c8, group, f.iteration, 0x9e37)));
-    }
-    // Coherent light sampling: the group's light pick and stratum.
-    let mut shared_light = Vec2::new(0.0, 0.0);
-    if f.coherent_light != 0 {
+        // Coherent light sampling: the group's light pick and stratum.
         shared_light = group_share(|group| {
             shared_light_draw(
                 stream(f.group_seed ^ 0x11c3, group, f.iteration, 0x4a7f),

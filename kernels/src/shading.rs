@@ -34,8 +34,22 @@ pub const SHADES_ENV_MAP: u32 = 1 << 21;
 /// `extend` shades one material queue (`crate::queues`): it reads its rays from the
 /// queue, whose index is in the bits from [`QUEUE_SHIFT`], not from the live list.
 pub const SHADES_QUEUE: u32 = 1 << 22;
+/// The frame reads group draws beyond the sampler's: `group_rr`, `coherent_glossy` or
+/// `coherent_light` is set ([`group_draws`]). Without it, and without whole-group ends,
+/// `extend` leaves those draws out.
+pub const SHADES_GROUP_DRAWS: u32 = 1 << 23;
 /// The first bit of a queue's index in a set with [`SHADES_QUEUE`].
 pub const QUEUE_SHIFT: u32 = 24;
+
+/// [`SHADES_GROUP_DRAWS`] where frame `f` reads the group draws it stands for, else 0: the
+/// renderer adds it to every set it builds and records `extend` with.
+pub fn group_draws(f: &Frame) -> u32 {
+    if f.group_rr != 0 || f.coherent_glossy != 0 || f.coherent_light != 0 {
+        SHADES_GROUP_DRAWS
+    } else {
+        0
+    }
+}
 
 /// The set of the `extend` that shades queue `queue` with `set`.
 pub const fn queue_set(set: u32, queue: u32) -> u32 {

@@ -13,6 +13,7 @@ use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::PathEnd;
 use cohort_kernels::reorder;
 use cohort_kernels::sampling::DiffuseSampler;
+use cohort_kernels::shading::group_draws;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_kernels::{compact, queues};
@@ -227,6 +228,8 @@ impl<'a> Wavefront<'a> {
         list: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
         let (s, p) = (self.scene, self.paths);
+        // As `prepare_kernels` built it.
+        let set = set | group_draws(self.frame);
         b.stage(Stage::Extend, |b| {
             extend::record::<S, E, I>(
                 b,

@@ -14,6 +14,7 @@ use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
 };
+use cohort_kernels::shading::group_draws;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_kernels::{queues, reorder};
@@ -113,8 +114,10 @@ impl Renderer<'_> {
         let started = Instant::now();
         let d = self.device;
         let specs = self.specs();
-        let shading = self.scene.shading;
-        self.startup.shading = shading;
+        self.startup.shading = self.scene.shading;
+        // Every `extend` is built, and recorded (`Wavefront::shade`), with the frame's
+        // group draws in its set.
+        let shading = self.scene.shading | group_draws(&self.frame);
         let wide = self.scene.nodes8.is_some();
         let compact = self.opts.compact;
         let reorder = self.opts.reorder > 0;
