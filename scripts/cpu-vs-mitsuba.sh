@@ -4,12 +4,12 @@
 # stanford-like (scripts/equal_time.py does the rendering and the arithmetic).
 # Installs Mitsuba 3.9.1 into a virtual environment ($VENV, default target/mitsuba-venv)
 # and Debian's libllvm19 when they are missing. Builds the release binary unless $BIN
-# names one. Usage: scripts/cpu-vs-mitsuba.sh [SCENES_DIR] (default ../shared/scenes);
+# names one. Usage: scripts/cpu-vs-mitsuba.sh [SCENES_DIR] (default render/tests/scenes);
 # $OUT_DIR (default target/cpu-vs-mitsuba) receives equal_time.{md,csv,png}; $SEEDS
 # (e.g. "1 2 3") renders Cohort once per seed, $MITSUBA_SEEDS (e.g. "1,2,3") Mitsuba.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SCENES="${1:-../shared/scenes}"
+SCENES="${1:-render/tests/scenes}"
 VENV="${VENV:-target/mitsuba-venv}"
 OUT_DIR="${OUT_DIR:-target/cpu-vs-mitsuba}"
 if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import mitsuba, numpy, matplotlib" 2>/dev/null; then
