@@ -78,6 +78,13 @@ struct Pending<'d> {
     counters: ReadBack<u32>,
 }
 
+/// The run's completed paths after a read-back of the device's count, a u32 that wraps
+/// at 2^32 (a 256x256 image reaches it at 65,536 paths per pixel): `total` grows by the
+/// count's increase modulo 2^32, exact because a batch completes fewer paths than that.
+fn add_completed(total: u64, counter: u32) -> u64 {
+    total + counter.wrapping_sub(total as u32) as u64
+}
+
 fn ns(s: &DispatchStats) -> Duration {
     Duration::from_nanos(s.gpu_time_ns.unwrap_or(0))
 }
@@ -438,8 +445,11 @@ impl<'d> Renderer<'d> {
                     None if !in_flight.is_empty() => break,
                     None => 1,
                     Some(per_iter) => {
+                        // Fewer than 2^32 paths end in one batch (each slot ends at most
+                        // one per iteration): the completed count's wrap (below) is exact.
+                        let most = (u32::MAX as u64 / n.max(1) as u64).clamp(1, 64) as f64;
                         let mut want =
-                            (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, 64.0);
+                            (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, most);
                         match until {
                             // Do not overshoot a time budget by more than a tenth of what is left.
                             Budget::KernelTime(t) => {
@@ -534,7 +544,7 @@ impl<'d> Renderer<'d> {
             // read-back: an upper bound on the rays traced.
             stats.rays += run.live * oldest.iterations as u64;
             let counters = completed.read(oldest.counters);
-            stats.completed_paths = counters[0] as u64;
+            stats.completed_paths = add_completed(stats.completed_paths, counters[0]);
             run.live = n as u64 - counters[1] as u64;
             stats.wall = wall_before + resumed.elapsed();
             progress(done(stats).min(1.0), stats);
@@ -625,6 +635,17 @@ mod tests {
             size: Some((32, 32)),
             ..Default::default()
         }
+    }
+
+    #[test]
+    fn the_completed_count_goes_past_the_devices_u32() {
+        assert_eq!(add_completed(0, 0), 0);
+        assert_eq!(add_completed(0, 1000), 1000);
+        assert_eq!(add_completed(1000, 1000), 1000);
+        let near = u32::MAX as u64 - 5;
+        assert_eq!(add_completed(near, 10), u32::MAX as u64 + 11);
+        assert_eq!(add_completed(1 << 32, 0), 1 << 32);
+        assert_eq!(add_completed((3 << 32) + 7, 100), (3 << 32) + 100);
     }
 
     /// Slices of a run give the image of one render: batching does not change which
