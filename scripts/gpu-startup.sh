@@ -3,10 +3,11 @@
 # opened beside the scene load) against `$B/cohort`, alternated, ROUNDS rounds: the
 # embedded stanford scan at 512x512 (16 paths) and the README's first command (cornell,
 # 256x256, 32 paths). Each binary renders once untimed first, so Cohort's pipeline cache
-# and the driver's are warm. Usage on the device: OUT=$OUT B=gpu-pack2 scripts/gpu-startup.sh
+# and the driver's are warm. `BINS` names other binaries of `$B` to alternate (default
+# `cohort-base cohort`). Usage on the device: OUT=$OUT B=gpu-pack2 scripts/gpu-startup.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
-B="${B:-gpu-pack2}"; ROUNDS="${ROUNDS:-3}"
+B="${B:-gpu-pack2}"; ROUNDS="${ROUNDS:-3}"; BINS="${BINS:-cohort-base cohort}"
 (cd "$B" && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort*) || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export COHORT_VK_VALIDATION=0
@@ -19,9 +20,9 @@ run() { # bin scene size paths
   end=$EPOCHREALTIME
   awk -v a="$start" -v b="$end" 'BEGIN { printf "process %.3f s\n", b - a }'
 }
-for bin in cohort-base cohort; do run $bin stanford 512 16 > /dev/null; run $bin cornell 256 32 > /dev/null; done
+for bin in $BINS; do run $bin stanford 512 16 > /dev/null; run $bin cornell 256 32 > /dev/null; done
 for r in $(seq "$ROUNDS"); do
-  for bin in cohort-base cohort; do
+  for bin in $BINS; do
     echo "== round $r $bin stanford 512"; run $bin stanford 512 16
     echo "== round $r $bin cornell 256 (README)"; run $bin cornell 256 32
   done

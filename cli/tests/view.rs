@@ -309,6 +309,12 @@ fn view_converges_to_render_restarts_on_camera_moves_and_switches_live() {
         let whole = 0..SIZE;
         let (converged, moved, reset, switched) = (&shots[0], &shots[1], &shots[2], &shots[3]);
         assert_eq!(converged.0["paths_per_pixel"][0].as_f64(), Some(8.0));
+        // The panel's figure, for scripts that measure the viewer.
+        let rate = converged.0["paths_per_second"][0].as_f64();
+        assert!(
+            rate.is_some_and(|r| r.is_finite() && r > 0.0),
+            "{backend}: {rate:?}"
+        );
         assert_same(
             &format!("{backend} converged"),
             &converged.1,

@@ -242,6 +242,7 @@ fn run_script(
                     "window": shared.window_id.lock().unwrap().unwrap_or(0),
                     "generation": p.generation,
                     "paths_per_pixel": p.paths_per_pixel,
+                    "paths_per_second": p.paths_per_second,
                     "done": p.done,
                 });
                 println!("{line}");

@@ -13,7 +13,7 @@
 //! | `sleep MS` | wait MS milliseconds |
 //! | `wait-file PATH` | until PATH exists |
 //! | `screenshot PATH` | write the window as it is on screen (image and panel) as a PNG |
-//! | `notify TEXT` | print one JSON line to stdout: TEXT, the window id, restart count, paths per pixel |
+//! | `notify TEXT` | print one JSON line to stdout: TEXT, the window id, restart count, and each side's paths per pixel and paths per second of kernel time |
 //! | `quit` | close the viewer |
 
 use std::path::{Path, PathBuf};

@@ -361,6 +361,11 @@ impl App {
                 .iter()
                 .map(|s| s.stats.paths_per_pixel())
                 .collect(),
+            paths_per_second: frame
+                .sides
+                .iter()
+                .map(|s| s.stats.paths_per_second())
+                .collect(),
             done: frame.sides.iter().all(|s| s.done),
         });
         Ok(())

@@ -66,11 +66,13 @@ pub struct Shared {
     pub window_id: Mutex<Option<u64>>,
 }
 
-/// The frame on screen: its restart count and each side's paths per pixel.
+/// The frame on screen: its restart count, and each side's paths per pixel and paths per
+/// second of kernel time (the figure the panel shows).
 #[derive(Clone, Debug)]
 pub struct Presented {
     pub generation: u64,
     pub paths_per_pixel: Vec<f64>,
+    pub paths_per_second: Vec<f64>,
     pub done: bool,
 }
 
