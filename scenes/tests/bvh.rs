@@ -4,9 +4,7 @@
 
 use cohort_scenes::bvh::{decode_leaf, is_leaf, MAX_LEAF_TRIANGLES};
 use cohort_scenes::embedded::{self, Rng};
-use cohort_scenes::{
-    brute_force_closest_hit, closest_hit, BruteForce, GpuBvh, GpuBvh8, Hit, Scene,
-};
+use cohort_scenes::{brute_force_closest_hit, closest_hit, BruteForce, GpuBvh, Hit, Scene};
 use glam::Vec3;
 
 fn random_unit(rng: &mut Rng) -> Vec3 {
@@ -234,35 +232,4 @@ fn bvh_matches_brute_force_on_fairyforest() {
 #[test]
 fn bvh_matches_brute_force_on_sponza() {
     check_scene("sponza", &embedded::load("sponza").unwrap(), 2000);
-}
-
-/// The build runs on every core (obvhs's `parallel`), yet its tree may not depend on how
-/// many there are: shards rendered on machines of different sizes merge into the unsplit
-/// image bit for bit only if they trace the same BVH. On confroom (250k triangles) the
-/// parallel sorts, reinsertion and leaf collapse split their work; obvhs splits its first
-/// bounding-box pass only from 500k, and that pass is a min/max, the same in any order.
-#[test]
-fn bvh_is_the_same_on_any_number_of_threads() {
-    let scene = embedded::load("confroom").unwrap();
-    let build = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let (bvh, wide) = GpuBvh8::build_scene(&scene).unwrap();
-            (
-                bvh.node_bytes().to_vec(),
-                bvh.triangle_bytes().to_vec(),
-                wide.map(|w| w.node_bytes().to_vec()),
-            )
-        })
-    };
-    let one = build(1);
-    for threads in [2, 3, 8] {
-        assert!(
-            build(threads) == one,
-            "the BVH built on {threads} threads differs from the one built on 1"
-        );
-    }
 }
