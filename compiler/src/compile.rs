@@ -68,7 +68,7 @@ pub struct CompiledKernel {
     pub prints: Vec<PrintSite>,
     /// Whether invocations wait for each other on the CPU backend: a barrier, a subgroup
     /// operation or `group_any` above thread level (`group_share` is not one there: each
-    /// invocation computes its group's value, see `ir::builder::Ctx::host_waits`).
+    /// invocation computes its group's value, see `ir::builder::Ctx::synchronises`).
     pub synchronises: bool,
     /// Where the kernel is defined, for messages about it (a lowering failure is a
     /// compiler bug reported there).
@@ -132,7 +132,7 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<CompiledKernel, Comp
             required_subgroup_size: built.spec.required_subgroup_size,
         },
         prints: built.prints.clone(),
-        synchronises: built.host_waits,
+        synchronises: built.synchronises,
         location: format!(
             "{}:{}:{}",
             built.info.file, built.info.line, built.info.column

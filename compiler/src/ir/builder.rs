@@ -73,7 +73,7 @@ pub(crate) struct Ctx {
     /// the CPU backend (barriers, subgroup operations, `group_any` above thread level):
     /// set by the intrinsics that emit one. `group_share` is not one: every invocation
     /// can compute its group's value there (`cohort::intrinsics::group_share`).
-    pub host_waits: bool,
+    pub synchronises: bool,
     pub next_binding: u32,
     pub bindings: Vec<crate::abi::Binding>,
     /// Storage buffers declared so far, and the lengths binding once `len()` is used.
@@ -168,7 +168,7 @@ impl Ctx {
             spec,
             info,
             uses_subgroups: false,
-            host_waits: false,
+            synchronises: false,
             next_binding: 0,
             storage_buffers: 0,
             lengths: None,

@@ -143,7 +143,7 @@ pub fn group_any(p: Val<bool>) -> Val<bool> {
             p,
         ),
         Group::Warp | Group::Block(_) => {
-            with(|c| c.host_waits = true);
+            with(|c| c.synchronises = true);
             // One flag per group in workgroup memory (zero-initialised at launch): set by
             // the invocations where `p` holds, read by all, cleared by the group's leader
             // once everybody has read it, so the next call starts from zero.

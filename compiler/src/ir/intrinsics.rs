@@ -16,7 +16,7 @@ use super::val::{Place, Val};
 /// `OpControlBarrier` over the workgroup.
 pub fn workgroup_barrier() {
     with(|c| {
-        c.host_waits = true;
+        c.synchronises = true;
         c.stmt(Statement::ControlBarrier(Barrier::WORK_GROUP))
     });
 }
@@ -24,7 +24,7 @@ pub fn workgroup_barrier() {
 /// `OpControlBarrier` with storage-buffer memory semantics.
 pub fn storage_barrier() {
     with(|c| {
-        c.host_waits = true;
+        c.synchronises = true;
         c.stmt(Statement::ControlBarrier(Barrier::STORAGE))
     });
 }
@@ -33,7 +33,7 @@ pub fn storage_barrier() {
 pub fn subgroup_barrier() {
     with(|c| {
         c.uses_subgroups = true;
-        c.host_waits = true;
+        c.synchronises = true;
         c.stmt(Statement::ControlBarrier(Barrier::SUB_GROUP))
     });
 }
@@ -41,7 +41,7 @@ pub fn subgroup_barrier() {
 /// WGSL's `workgroupUniformLoad` of `p`.
 pub fn workgroup_uniform_load<T: GpuType>(p: Place<T>) -> Val<T> {
     with(|c| {
-        c.host_waits = true;
+        c.synchronises = true;
         let ty = T::naga_type(&mut c.module);
         let result = c.expr(Expression::WorkGroupUniformLoadResult { ty });
         c.stmt(Statement::WorkGroupUniformLoad {
@@ -56,7 +56,7 @@ pub fn workgroup_uniform_load<T: GpuType>(p: Place<T>) -> Val<T> {
 pub fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
     with(|c| {
         c.uses_subgroups = true;
-        c.host_waits = true;
+        c.synchronises = true;
         let ty = T::naga_type(&mut c.module);
         let result = c.expr(Expression::SubgroupOperationResult { ty });
         c.stmt(Statement::SubgroupCollectiveOperation {
@@ -72,7 +72,7 @@ pub fn subgroup_op<T: GpuType>(op: So, collective: Co, x: Val<T>) -> Val<T> {
 fn subgroup_gather<T: GpuType>(mode: GatherMode, x: Val<T>) -> Val<T> {
     with(|c| {
         c.uses_subgroups = true;
-        c.host_waits = true;
+        c.synchronises = true;
         let ty = T::naga_type(&mut c.module);
         let result = c.expr(Expression::SubgroupOperationResult { ty });
         c.stmt(Statement::SubgroupGather {
@@ -103,7 +103,7 @@ pub fn subgroup_shuffle<T: GpuType>(x: Val<T>, lane: Val<u32>) -> Val<T> {
 pub fn subgroup_ballot(p: Val<bool>) -> Val<glam::UVec4> {
     with(|c| {
         c.uses_subgroups = true;
-        c.host_waits = true;
+        c.synchronises = true;
         let result = c.expr(Expression::SubgroupBallotResult);
         c.stmt(Statement::SubgroupBallot {
             result,

@@ -23,8 +23,8 @@ pub struct BuiltKernel {
     pub module: naga::Module,
     pub bindings: Vec<RtBinding>,
     pub uses_subgroups: bool,
-    /// Whether invocations wait for each other on the CPU backend (`Ctx::host_waits`).
-    pub host_waits: bool,
+    /// Whether invocations wait for each other on the CPU backend (`Ctx::synchronises`).
+    pub synchronises: bool,
     /// Operations this specialisation cannot lower; `emit` turns them into an error.
     pub unsupported: Vec<String>,
     /// The kernel's print sites (`crate::abi::PrintSite`), in site order.
@@ -64,7 +64,7 @@ pub fn build_kernel(
         module: ctx.module,
         bindings: ctx.bindings,
         uses_subgroups: ctx.uses_subgroups,
-        host_waits: ctx.host_waits,
+        synchronises: ctx.synchronises,
         unsupported: ctx.unsupported,
         prints: ctx.prints,
         spec,
