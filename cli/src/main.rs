@@ -591,13 +591,20 @@ fn render(a: RenderArgs) -> Result<(), String> {
         let parallel = times.bvh_built.max(times.device_opened);
         let other = ready.saturating_sub(parallel + startup.upload + startup.pipelines);
         println!(
-            "startup        {:.3} s to the first iteration: scene load {:.3} + BVH build {:.3} beside device {:.3}, then upload {:.3}, pipelines {:.3}, other {:.3} (shading {})",
+            "startup        {:.3} s to the first iteration: scene load {:.3} + BVH build {:.3} beside device {:.3}, then upload {:.3}, pipelines {:.3}{}, other {:.3} (shading {})",
             ready.as_secs_f64(),
             times.scene_loaded.as_secs_f64(),
             startup.bvh_build.as_secs_f64(),
             times.device_opened.as_secs_f64(),
             startup.upload.as_secs_f64(),
             startup.pipelines.as_secs_f64(),
+            // The pipeline thread the others waited for, named without the type
+            // parameters that follow `___` (`--stats` has them).
+            startup.kernels.first().map_or(String::new(), |(name, t)| format!(
+                " (longest {} {:.3})",
+                name.split("___").next().unwrap_or(name),
+                t.as_secs_f64()
+            )),
             other.as_secs_f64(),
             cohort_render::shading::label(startup.shading)
         );
@@ -622,6 +629,12 @@ fn render(a: RenderArgs) -> Result<(), String> {
         written.as_secs_f64()
     );
     if let Some(path) = &a.stats {
+        // Each pipeline thread's time, by its kernels' names, longest first.
+        let kernels: serde_json::Map<String, serde_json::Value> = startup
+            .kernels
+            .iter()
+            .map(|(name, t)| (name.clone(), t.as_secs_f64().into()))
+            .collect();
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
@@ -635,7 +648,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "wall_s": stats.wall.as_secs_f64(), "outputs_s": written.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
             "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": times.scene_loaded.as_secs_f64(), "device": times.device_opened.as_secs_f64(),
-                "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64() },
+                "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64(),
+                "kernels": kernels },
             "shading": cohort_render::shading::label(startup.shading),
             "scene_integrator": {
                 "max_depth": scene.integrator.max_depth, "rr_depth": scene.integrator.rr_depth,

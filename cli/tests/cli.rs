@@ -60,6 +60,15 @@ fn renders_and_writes_outputs() {
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["width"], 24);
     assert_eq!(json["paths_per_pixel"], 2.0);
+    // Each pipeline thread's time, by its kernels' names: the stages this render uses.
+    let kernels = json["startup_s"]["kernels"].as_object().unwrap();
+    for stage in ["init_paths", "traverse", "extend"] {
+        assert!(
+            kernels.keys().any(|k| k.contains(stage)),
+            "no {stage} in {kernels:?}"
+        );
+    }
+    assert!(kernels.values().all(|t| t.as_f64().is_some_and(|t| t >= 0.0)));
     // No temporary files are left behind.
     let names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()

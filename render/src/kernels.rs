@@ -4,7 +4,7 @@
 //! ([`Specs`]), and compiling their pipelines before any render.
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use cohort::runtime::{BackendKind, KernelArtifact};
 use cohort_kernels::compact;
@@ -191,22 +191,28 @@ impl Renderer<'_> {
         if reorder {
             builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));
         }
-        std::thread::scope(|scope| {
+        let mut kernels = std::thread::scope(|scope| {
             let threads: Vec<_> = builds
                 .into_iter()
                 .map(|build| {
-                    scope.spawn(move || -> Result<(), RenderError> {
-                        for a in build()? {
-                            d.prepare(&a)?;
+                    scope.spawn(move || -> Result<(String, Duration), RenderError> {
+                        let started = Instant::now();
+                        let artifacts = build()?;
+                        for a in &artifacts {
+                            d.prepare(a)?;
                         }
-                        Ok(())
+                        let names: Vec<&str> = artifacts.iter().map(|a| a.name.as_str()).collect();
+                        Ok((names.join("+"), started.elapsed()))
                     })
                 })
                 .collect();
             threads
                 .into_iter()
-                .try_for_each(|t| t.join().expect("a pipeline thread panicked"))
+                .map(|t| t.join().expect("a pipeline thread panicked"))
+                .collect::<Result<Vec<_>, _>>()
         })?;
+        kernels.sort_by_key(|k| std::cmp::Reverse(k.1));
+        self.startup.kernels = kernels;
         if reorder && self.paths.sort.is_none() {
             self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
         }

@@ -157,6 +157,7 @@ impl<'d> Renderer<'d> {
             bvh_build: gpu.bvh_build,
             upload: gpu.upload + allocated.elapsed(),
             pipelines: Duration::ZERO,
+            kernels: Vec::new(),
             shading: gpu.shading,
         };
         let mut r = Renderer {
@@ -177,7 +178,7 @@ impl<'d> Renderer<'d> {
 
     /// Where the time before the first iteration went.
     pub fn startup(&self) -> Startup {
-        self.startup
+        self.startup.clone()
     }
 
     /// Takes new options for the next run, keeping the scene, the image size, the

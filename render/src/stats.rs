@@ -100,7 +100,7 @@ impl RenderStats {
 
 /// Where the time before the first iteration went (the scene's share is measured by
 /// `GpuScene::prepare`).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct Startup {
     /// BVH build (binary and 8-wide) on the host.
     pub bvh_build: Duration,
@@ -108,6 +108,10 @@ pub struct Startup {
     pub upload: Duration,
     /// Pipeline creation of the kernels the options use (prepared before any render).
     pub pipelines: Duration,
+    /// Each pipeline thread's kernels (artifact names, `+`-joined) and the time it took to
+    /// build and create them, longest first: the threads run side by side, so the first
+    /// is what `pipelines` waited for (with empty caches, the driver compiling it).
+    pub kernels: Vec<(String, Duration)>,
     /// What `extend` was built for: the scene's BSDF kinds and shading features
     /// (`cohort_kernels::shading`, whose `label` names them).
     pub shading: u32,
