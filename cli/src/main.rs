@@ -629,7 +629,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
         written.as_secs_f64()
     );
     if let Some(path) = &a.stats {
-        // Each pipeline thread's time, by its kernels' names, longest first.
+        // Each pipeline thread's time, by its kernels' names.
         let kernels: serde_json::Map<String, serde_json::Value> = startup
             .kernels
             .iter()
