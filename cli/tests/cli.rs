@@ -68,7 +68,9 @@ fn renders_and_writes_outputs() {
             "no {stage} in {kernels:?}"
         );
     }
-    assert!(kernels.values().all(|t| t.as_f64().is_some_and(|t| t >= 0.0)));
+    assert!(kernels
+        .values()
+        .all(|t| t.as_f64().is_some_and(|t| t >= 0.0)));
     // No temporary files are left behind.
     let names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
