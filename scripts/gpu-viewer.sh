@@ -2,9 +2,15 @@
 # The viewer's paths/s at 256x256 against `cohort render`'s at 256x256 and 1024x1024, on the
 # same GPU, alternated ROUNDS rounds, per scene. The viewer runs under Xvfb (the device has
 # no display) driven by a script; its `notify` line reports paths per second of kernel time,
-# the figure its panel shows. Needs Xvfb and the X client libraries (on a device without
-# them, extract the .debs of `xvfb`, `x11-xkb-utils`, `xkb-data` and the libraries `ldd`
-# names into / first). Usage on the device: OUT=$OUT B=gpu-s scripts/gpu-viewer.sh
+# the figure its panel shows. Needs Xvfb and the X client libraries. A device without them
+# gets them as .debs downloaded here (Debian 12) and extracted there into / first
+# (`for f in gpu-x/*.deb; do dpkg -x $f /; done`):
+#   apt-get download xvfb x11-xkb-utils xkb-data xserver-common libaudit1 libbrotli1 libbsd0 \
+#     libcap-ng0 libfontenc1 libfreetype6 libmd0 libpixman-1-0 libpng16-16 libunwind8 libx11-6 \
+#     libx11-data libx11-xcb1 libxau6 libxcb-xkb1 libxcb1 libxcursor1 libxdmcp6 libxext6 \
+#     libxfixes3 libxfont2 libxi6 libxkbcommon-x11-0 libxkbcommon0 libxkbfile1 libxrandr2 \
+#     libxrender1 libxshmfence1
+# Usage on the device: OUT=$OUT B=gpu-s scripts/gpu-viewer.sh
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
 B="${B:-gpu-s}"; ROUNDS="${ROUNDS:-2}"
