@@ -13,12 +13,11 @@ use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::PathEnd;
 use cohort_kernels::reorder;
 use cohort_kernels::sampling::DiffuseSampler;
-use cohort_kernels::shading::group_draws;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_kernels::{compact, queues};
 
-use crate::kernels::Specs;
+use crate::kernels::{extend_set, Specs};
 use crate::paths::Paths;
 use crate::{GpuScene, RenderError};
 
@@ -191,7 +190,8 @@ impl<'a> Wavefront<'a> {
         let (s, p) = (self.scene, self.paths);
         let Some(q) = p.queues.as_ref().filter(|_| self.queues) else {
             let all = Grid::Threads(self.frame.slots);
-            return self.shade::<S, E, I>(b, all, s.shading, &p.count, live);
+            let set = extend_set(s, self.frame);
+            return self.shade::<S, E, I>(b, all, set, &p.count, live);
         };
         b.stage(Stage::Queue, |b| {
             queues::record(
@@ -228,8 +228,6 @@ impl<'a> Wavefront<'a> {
         list: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
         let (s, p) = (self.scene, self.paths);
-        // As `prepare_kernels` built it.
-        let set = set | group_draws(self.frame);
         b.stage(Stage::Extend, |b| {
             extend::record::<S, E, I>(
                 b,

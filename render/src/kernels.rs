@@ -10,6 +10,7 @@ use cohort::runtime::{BackendKind, KernelArtifact};
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
+use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
@@ -22,7 +23,9 @@ use cohort_kernels::{queues, reorder};
 use crate::design::Choice;
 use crate::paths::SortState;
 use crate::queues::{plan, QueueState};
-use crate::{Budget, InPatch, IntegratorKind, RenderError, RenderStats, Renderer, Shading};
+use crate::{
+    Budget, GpuScene, InPatch, IntegratorKind, RenderError, RenderStats, Renderer, Shading,
+};
 
 /// An operation over the kernels of the current options (see `Renderer::with_kernels`).
 pub(crate) trait KernelOp {
@@ -115,9 +118,7 @@ impl Renderer<'_> {
         let d = self.device;
         let specs = self.specs();
         self.startup.shading = self.scene.shading;
-        // Every `extend` is built, and recorded (`Wavefront::shade`), with the frame's
-        // group draws in its set.
-        let shading = self.scene.shading | group_draws(&self.frame);
+        let shading = extend_set(&self.scene, &self.frame);
         let wide = self.scene.nodes8.is_some();
         let compact = self.opts.compact;
         let reorder = self.opts.reorder > 0;
@@ -227,4 +228,11 @@ impl Renderer<'_> {
         self.startup.pipelines += started.elapsed();
         Ok(())
     }
+}
+
+/// The set one `extend` over every ray is built and recorded with: the scene's, with the
+/// frame's group draws (`cohort_kernels::shading::group_draws`). The queues' sets derive
+/// from it (`crate::queues::plan`).
+pub(crate) fn extend_set(scene: &GpuScene, frame: &Frame) -> u32 {
+    scene.shading | group_draws(frame)
 }
