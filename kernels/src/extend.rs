@@ -20,8 +20,8 @@ use crate::perturb::{perturb_normal, perturb_weight};
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{cell_point, DiffuseSampler};
 use crate::scatter::{
-    blend_eval, blend_traits, blend_weight, BLEND_LEVELS, BLEND_NONE, BLEND_NOT_PLAIN,
-    BLEND_READS_UV,
+    blend_eval, blend_traits, blend_weights, level_weight, BLEND_LEVELS, BLEND_NONE,
+    BLEND_NOT_PLAIN, BLEND_READS_UV,
 };
 use crate::shading::*;
 use crate::texture::{hit_uv, luminance, texture_at_hit};
@@ -437,9 +437,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 // The blend level of the BSDF chosen, and the probability of that choice.
                 let mut picked = 0u32;
                 let mut pick_p = 1.0f32;
+                let mut weights = Vec4::ZERO;
+                if has_blend && root.blend != 0 {
+                    weights = blend_weights(shading, materials, textures, tex_coords, root, t, h);
+                }
                 if has_blend {
                     while level < BLEND_LEVELS && m.blend != 0 {
-                        let weight = blend_weight(textures, tex_coords, m, t, h);
+                        let weight = level_weight(weights, level);
                         if uniform(key, 10 + level) < weight {
                             m = materials[(m.blend - 1) as usize];
                             level += 1;
@@ -615,8 +619,10 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     }
                 }
                 // The BSDF, in one dispatch (`crate::bsdf`): its value towards the light
-                // sample (a blend's comes from `blend_eval`) and the next direction (none
-                // where the path passes through).
+                // sample and the next direction (none where the path passes through). A
+                // kernel that shades blends takes every light sample's value from
+                // `blend_eval` instead (below), so that each BSDF's `eval` is inlined into it
+                // once, not also here (`has_blend` is known when the kernel is built).
                 let mut u_glossy = u;
                 if f.coherent_glossy != 0 {
                     let cell = shared_cell % (f.patches_n * f.patches_n);
@@ -636,7 +642,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     tex_coords,
                     at,
                     wi,
-                    I::NEE && light_on && !mixture,
+                    !has_blend && I::NEE && light_on,
                     thr,
                     draws,
                     !pass_through && !masked_through,
@@ -682,8 +688,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 let blend_delta = plain_blend && alive && delta_p > 0.0;
                 let blend_pdf =
                     mixture && alive && bsdf_pdf > 0.0 && !pass_through && !masked_through;
-                // The blend's evaluations, towards the light sample (k = 0) and at the drawn
-                // direction (k = 1), at one call site: each inlines every BSDF of the blend
+                // A blend kernel's evaluations, towards the light sample (k = 0: the blend's
+                // mixture, or the one BSDF the vertex shades with) and at the drawn direction
+                // (k = 1), at one call site: each inlines every BSDF of the scene's set
                 // (pipeline creation time grows with the code).
                 let mut blend_light = Vec4::ZERO;
                 let mut blend_next = Vec4::ZERO;
@@ -692,21 +699,27 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     while k < 2 {
                         let towards_light = k == 0;
                         let wanted = if towards_light {
-                            I::NEE && light_on && mixture
+                            I::NEE && light_on
                         } else {
                             blend_delta || blend_pdf
                         };
                         if wanted {
                             let mut dir = new_d;
                             let mut skip = BLEND_NONE;
+                            let mut from = root;
+                            let mut levels = BLEND_LEVELS;
                             if towards_light {
                                 dir = wi;
+                                if !mixture {
+                                    from = m;
+                                    levels = 0;
+                                }
                             } else if blend_delta {
                                 skip = picked;
                             }
                             let b = blend_eval(
-                                shading, materials, textures, tex_coords, root, t, h, uv, d, dir,
-                                n, ng, front, skip,
+                                shading, materials, textures, tex_coords, from, weights, t, h, uv,
+                                d, dir, n, ng, front, skip, levels,
                             );
                             if towards_light {
                                 blend_light = b;
@@ -725,7 +738,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
                 if I::NEE && light_on {
                     // f·cos and the BSDF-sampling density of `wi`.
-                    let e = if mixture { blend_light } else { shaded.eval };
+                    let e = if has_blend { blend_light } else { shaded.eval };
                     let fc = e.truncate();
                     let pdf_b = e.w;
                     // A normal or bump map weighs the direction (and zeroes its

@@ -28,9 +28,11 @@ pub const BLEND_LEVELS: u32 = 4;
 pub const BLEND_NONE: u32 = BLEND_LEVELS + 1;
 
 /// The weight of a blend material `m`'s second BSDF at the hit: its number, or the
-/// luminance of its texture, clamped to [0, 1] (Mitsuba's `eval_weight`).
+/// luminance of its texture, clamped to [0, 1] (Mitsuba's `eval_weight`). A texture is
+/// read only where the scene's set `shading` has textures.
 #[kernel_fn]
 pub fn blend_weight(
+    shading: u32,
     textures: &[Vec4],
     tex_coords: &[Vec4],
     m: Material,
@@ -38,7 +40,7 @@ pub fn blend_weight(
     h: Vec4,
 ) -> f32 {
     let mut weight = m.blend_weight;
-    if m.blend_texture != 0 {
+    if shading & SHADES_TEXTURES != 0 && m.blend_texture != 0 {
         let buv = hit_uv(tex_coords, t.original, h);
         weight = luminance(texture_at_hit(
             textures,
@@ -50,6 +52,53 @@ pub fn blend_weight(
         .clamp(0.0, 1.0);
     }
     weight
+}
+
+/// The weights of blend `root`'s levels 0 to 3 (x to w; 0 past its last blend), read once
+/// per vertex: `extend`'s choice and [`blend_eval`] both take them from here, so that a
+/// weight's texture lookup is inlined into the kernel once.
+#[kernel_fn]
+pub fn blend_weights(
+    shading: u32,
+    materials: &[Material],
+    textures: &[Vec4],
+    tex_coords: &[Vec4],
+    root: Material,
+    t: Triangle,
+    h: Vec4,
+) -> Vec4 {
+    let mut m = root;
+    let mut weights = Vec4::ZERO;
+    let mut level = 0u32;
+    while level < BLEND_LEVELS && m.blend != 0 {
+        let w = blend_weight(shading, textures, tex_coords, m, t, h);
+        if level == 0 {
+            weights.x = w;
+        } else if level == 1 {
+            weights.y = w;
+        } else if level == 2 {
+            weights.z = w;
+        } else {
+            weights.w = w;
+        }
+        m = materials[(m.blend - 1) as usize];
+        level += 1;
+    }
+    weights
+}
+
+/// Level `level`'s entry of [`blend_weights`].
+#[kernel_fn]
+pub fn level_weight(weights: Vec4, level: u32) -> f32 {
+    if level == 0 {
+        weights.x
+    } else if level == 1 {
+        weights.y
+    } else if level == 2 {
+        weights.z
+    } else {
+        weights.w
+    }
 }
 
 /// [`blend_traits`]: some BSDF of the blend has a mask or a normal or bump map. Then each
@@ -86,7 +135,13 @@ pub fn blend_traits(materials: &[Material], root: Material) -> u32 {
 /// [`bsdf_eval`] of a blend: the sum over its BSDFs, each weighted by the probability
 /// that `extend`'s choice reaches it (the first BSDF of blend level k: the product of the
 /// weights above it times one minus its own), leaving out the BSDF of level `skip`
-/// ([`BLEND_NONE`]: none).
+/// ([`BLEND_NONE`]: none) and descending at most `levels` levels (0: `root`'s own BSDF
+/// alone, weight 1, whether or not it is a blend). `weights` are `root`'s
+/// [`blend_weights`].
+///
+/// In a kernel that shades blends this is the only call site of [`bsdf_eval`]: `extend`
+/// evaluates every light sample through it, a blend's or not, so that each BSDF's `eval`
+/// is inlined once (pipeline creation time grows faster than the code).
 #[kernel_fn]
 pub fn blend_eval(
     shading: u32,
@@ -94,6 +149,7 @@ pub fn blend_eval(
     textures: &[Vec4],
     tex_coords: &[Vec4],
     root: Material,
+    weights: Vec4,
     t: Triangle,
     h: Vec4,
     uv: Vec2,
@@ -103,16 +159,17 @@ pub fn blend_eval(
     ng: Vec3,
     front: bool,
     skip: u32,
+    levels: u32,
 ) -> Vec4 {
     let mut m = root;
     let mut reach = 1.0f32;
     let mut sum = Vec4::ZERO;
     let mut level = 0u32;
     while level <= BLEND_LEVELS {
-        let nested = m.blend != 0 && level < BLEND_LEVELS;
+        let nested = m.blend != 0 && level < levels;
         let mut w = 0.0f32;
         if nested {
-            w = blend_weight(textures, tex_coords, m, t, h);
+            w = level_weight(weights, level);
         }
         let p = reach * (1.0 - w);
         if p > 0.0 && level != skip {
