@@ -33,13 +33,19 @@ pub fn roughness(
     if table != 0 {
         let b = textures[(table - 1) as usize];
         a = Vec2::new(b.x, b.y);
-        let tu = b.z.to_bits();
-        let tv = b.w.to_bits();
-        if tu != 0 {
-            a.x = luminance(texture_at_hit(textures, tu - 1, uv, original, h));
-        }
-        if tv != 0 {
-            a.y = luminance(texture_at_hit(textures, tv - 1, uv, original, h));
+        // Both directions' textures through one lookup, so that it is inlined once.
+        let mut k = 0u32;
+        while k < 2 {
+            let texture = if k == 0 { b.z.to_bits() } else { b.w.to_bits() };
+            if texture != 0 {
+                let v = luminance(texture_at_hit(textures, texture - 1, uv, original, h));
+                if k == 0 {
+                    a.x = v;
+                } else {
+                    a.y = v;
+                }
+            }
+            k += 1;
         }
     }
     Vec2::new(a.x.max(1.0e-4), a.y.max(1.0e-4))

@@ -11,16 +11,32 @@ use crate::sampling::{
     fresnel_dielectric, microfacet_eval, microfacet_sample, plastic_specular_probability,
     DiffuseSampler,
 };
-use crate::texture::texture_eval;
+use crate::texture::TEXTURE_HEADER;
 use cohort::prelude::*;
 
 /// The coating's transmittance for light at cosine `cos` to the normal: entry
 /// cos × 63 of the table, linearly interpolated (the texture's texel centres sit at
 /// (k + 0.5) / 64).
+///
+/// The table is a 64 x 1 bitmap, bilinear, clamped, with the identity `to_uv`, written by
+/// the scene loader. This is `texture_eval`'s bilinear lookup of it, the same operations
+/// on the same texels (its second row is the first, clamped, weighted 0), written out
+/// for one row: the BSDF reads the table five times, and a whole texture lookup inlined
+/// at each would add some 3,000 SPIR-V words to every kernel with a rough plastic
+/// (pipeline creation grows faster than the code).
 #[kernel_fn]
 pub fn transmittance(textures: &[Vec4], m: Material, cos: f32) -> f32 {
     let x = cos.clamp(0.0, 1.0) * 63.0;
-    texture_eval(textures, m.table - 1, Vec2::new((x + 0.5) / 64.0, 0.5)).x
+    let header = m.table - 1;
+    let w = textures[header as usize].y.to_bits() as i32;
+    let at = (x + 0.5) / 64.0 * w as f32 - 0.5;
+    let x0 = at.floor();
+    let fx = at - x0;
+    let xi = x0 as i32;
+    let base = header + TEXTURE_HEADER;
+    let a = textures[(base + xi.clamp(0, w - 1) as u32) as usize].x;
+    let b = textures[(base + (xi + 1).clamp(0, w - 1) as u32) as usize].x;
+    a * (1.0 - fx) + b * fx
 }
 
 /// The base's diffuse albedo as it leaves the coating, without the cosine, 1 / π and the
