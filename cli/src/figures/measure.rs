@@ -100,28 +100,47 @@ impl<'a> Sweep<'a> {
         })
     }
 
-    /// Warm-up: one iteration of every configuration, so that a first-use cost of its
+    /// Warm-up: one iteration of every configuration in every column, with the options
+    /// its measured points use (`point_options`: the sampler, the roulette, whole-group
+    /// ends and compaction each choose other kernels), so that a first-use cost of its
     /// pipelines (some drivers compile lazily, inside the timed dispatch) is paid here
     /// and not inside a measured point.
     pub fn warm_up(&self, scene: &LoadedScene) -> Result<(), String> {
         let plan = self.plan;
-        for alg in std::iter::once(Algorithm::NORMAL).chain(plan.configs.iter().copied()) {
-            self.bar.set_message(format!(
-                "[{}/{}] {} warm-up {}",
-                self.done + 1,
-                self.total,
-                scene.spec.label,
-                alg.name()
-            ));
-            let opts = RenderOptions {
-                algorithm: alg,
-                budget: Budget::KernelTime(Duration::from_nanos(1)),
-                size: Some(scene.size),
-                integrator: plan.integrator,
-                ..Default::default()
+        for column in &plan.columns {
+            let group = Group {
+                index: 0,
+                scene: 0,
+                interleave: 1,
+                column: *column,
+                n: plan
+                    .ns
+                    .first()
+                    .copied()
+                    .unwrap_or(RenderOptions::default().patches_n),
             };
-            self.render(scene, opts)
-                .map_err(|e| format!("{} warm-up {}: {e}", scene.spec.label, alg.name()))?;
+            for alg in plan.algorithms_of(&group) {
+                self.bar.set_message(format!(
+                    "[{}/{}] {} warm-up {}{}",
+                    self.done + 1,
+                    self.total,
+                    scene.spec.label,
+                    alg.name(),
+                    column.suffix
+                ));
+                let opts = RenderOptions {
+                    budget: Budget::KernelTime(Duration::from_nanos(1)),
+                    ..point_options(plan, alg, &group, scene.size)
+                };
+                self.render(scene, opts).map_err(|e| {
+                    format!(
+                        "{} warm-up {}{}: {e}",
+                        scene.spec.label,
+                        alg.name(),
+                        column.suffix
+                    )
+                })?;
+            }
         }
         Ok(())
     }
@@ -249,20 +268,7 @@ impl<'a> Sweep<'a> {
             })
             .collect();
         for (i, point) in points.iter().enumerate() {
-            let opts = RenderOptions {
-                algorithm: point.algorithm,
-                in_patch: InPatch::Uniform,
-                patches_n: point.n.unwrap_or(RenderOptions::default().patches_n),
-                group_rr: column.group_rr,
-                interleave: d,
-                budget: Budget::KernelTime(plan.time),
-                seed: plan.seed,
-                size: Some((w, h)),
-                compact: column.compact,
-                whole_group_end: column.whole.then_some(plan.end_continue),
-                integrator: plan.integrator,
-                ..Default::default()
-            };
+            let opts = point_options(plan, point.algorithm, group, (w, h));
             if i < pool.len() {
                 pool[i]
                     .reconfigure(opts)
@@ -319,5 +325,35 @@ impl<'a> Sweep<'a> {
             measured.push((point, stats, image));
         }
         Ok(measured)
+    }
+}
+
+/// The options of the point of `group` that renders with `algorithm` (`normal` keeps the
+/// default patch count; the others take the group's N): the measured run's, and the
+/// warm-up's, which must build the same kernels.
+fn point_options(
+    plan: &Plan,
+    algorithm: Algorithm,
+    group: &Group,
+    size: (u32, u32),
+) -> RenderOptions {
+    let column = group.column;
+    RenderOptions {
+        algorithm,
+        in_patch: InPatch::Uniform,
+        patches_n: if algorithm == Algorithm::NORMAL {
+            RenderOptions::default().patches_n
+        } else {
+            group.n
+        },
+        group_rr: column.group_rr,
+        interleave: group.interleave,
+        budget: Budget::KernelTime(plan.time),
+        seed: plan.seed,
+        size: Some(size),
+        compact: column.compact,
+        whole_group_end: column.whole.then_some(plan.end_continue),
+        integrator: plan.integrator,
+        ..Default::default()
     }
 }
