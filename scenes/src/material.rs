@@ -58,7 +58,9 @@ pub enum Bsdf {
     /// Mitsuba `roughplastic`: [`Bsdf::Plastic`] with a rough (microfacet) coating: its
     /// glossy reflection, and the base's light through the rough interface, weighted by
     /// the precomputed transmittance table ([`crate::rough_plastic`]) stored as texture
-    /// `table` of the scene.
+    /// `table` of the scene: a `TABLE_SIZE` x 1 bilinear bitmap with clamped wrapping and
+    /// the identity `to_uv`, the form the kernels read it in (as the Mitsuba loader writes
+    /// it).
     RoughPlastic {
         eta: f32,
         alpha: f32,
