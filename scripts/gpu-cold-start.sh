@@ -10,6 +10,7 @@
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"
 B="${B:-gpu-bin}"
+scripts/unpack-bins.sh "$B" || exit 1
 S="${S:-gpu-scenes}"
 mkdir -p "$OUT"
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"

@@ -7,6 +7,7 @@
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"
 B="${B:-bin-gpu}"
+scripts/unpack-bins.sh "$B" || exit 1
 mkdir -p "$OUT"
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export CI=true COHORT_VK_VALIDATION=0

@@ -8,7 +8,7 @@ for f in cohort-old cohort-new mitsuba_reference; do
   [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build it here (release) and xz it first (BENCHMARKS.md, session 12)" >&2; exit 2; }
 done
 OUT="${OUT:?set OUT to the folder for the results (the device tool sets it)}"
-(cd gpu-pack && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort-* mitsuba_reference) || exit 1
+scripts/unpack-bins.sh gpu-pack || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"; export CI=true
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm,clocks.mem --format=csv | tee "$OUT/gpu.txt"
 for r in 1 2; do for v in old new; do for s in cornell confroom; do for be in vulkan wgpu; do

@@ -8,7 +8,7 @@
 set -uo pipefail
 OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
 B="${B:-gpu-pack2}"; ROUNDS="${ROUNDS:-3}"; BINS="${BINS:-cohort-base cohort}"
-(cd "$B" && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort*) || exit 1
+scripts/unpack-bins.sh "$B" || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export COHORT_VK_VALIDATION=0
 nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv

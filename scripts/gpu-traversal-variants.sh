@@ -15,7 +15,7 @@ for f in traversal_variants traversal_variants-old cohort-old cohort-new kernel_
   [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build the release binaries here, xz them into gpu-pack/ and pack ../shared/scenes as shared-scenes.tar.xz first (BENCHMARKS.md, session 16)" >&2; exit 2; }
 done
 R=$(mktemp -d)
-(cd gpu-pack && for f in *.xz; do xz -dkf "$f"; done && chmod +x traversal_variants* cohort-* kernel_bench) || exit 1
+scripts/unpack-bins.sh gpu-pack || exit 1
 mkdir -p "$R/shared" && tar xf gpu-pack/shared-scenes.tar -C "$R/shared"
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"; export CI=true
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm,clocks.mem --format=csv | tee "$R/gpu.txt"

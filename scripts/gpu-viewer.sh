@@ -16,7 +16,7 @@ OUT="${OUT:-./gpu-out}"; mkdir -p "$OUT"
 B="${B:-gpu-s}"; ROUNDS="${ROUNDS:-2}"
 SCENES="${SCENES:-render/tests/scenes/cornell-box/scene.xml render/tests/scenes/stanford-like/scene.xml}"
 PATHS="${PATHS:-4096}"; BIG_PATHS="${BIG_PATHS:-256}"; BACKEND="${BACKEND:-vulkan}"
-(cd "$B" && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort*) || exit 1
+scripts/unpack-bins.sh "$B" || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv 2>/dev/null
 

@@ -12,7 +12,7 @@ OUT="${OUT:-./gpu-out}"
 B="${B:-gpu-pack2}"
 SCENES="${SCENES:-render/tests/scenes}"
 mkdir -p "$OUT"
-(cd "$B" && for f in *.xz; do xz -dkf "$f"; done && chmod +x cohort*) || exit 1
+scripts/unpack-bins.sh "$B" || exit 1
 export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
 export COHORT_VK_VALIDATION=0
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv | tee "$OUT/gpu.txt"
