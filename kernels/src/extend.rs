@@ -7,6 +7,7 @@
 //! estimate to its pixel and regenerate a fresh camera ray for the same pixel (path
 //! regeneration, Novak et al. 2010). `flags[i]` records which, for compaction.
 
+use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::integrator::Integrator;
@@ -20,8 +21,8 @@ use crate::perturb::{perturb_normal, perturb_weight};
 use crate::rng::{hash, stream, uniform};
 use crate::sampling::{cell_point, DiffuseSampler};
 use crate::scatter::{
-    blend_eval, blend_traits, blend_weights, level_weight, BLEND_LEVELS, BLEND_NONE,
-    BLEND_NOT_PLAIN, BLEND_READS_UV,
+    blend_eval, blend_traits, blend_weights, BLEND_LEVELS, BLEND_NONE, BLEND_NOT_PLAIN,
+    BLEND_READS_UV,
 };
 use crate::shading::*;
 use crate::texture::{hit_uv, luminance, texture_at_hit};
@@ -443,7 +444,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                 }
                 if has_blend {
                     while level < BLEND_LEVELS && m.blend != 0 {
-                        let weight = level_weight(weights, level);
+                        let weight = component(weights, level);
                         if uniform(key, 10 + level) < weight {
                             m = materials[(m.blend - 1) as usize];
                             level += 1;

@@ -16,6 +16,7 @@
 //! Mitsuba's image, so `extend` reproduces it with [`blend_eval`] leaving the drawing
 //! BSDF out (checked against the `mitsuba` package: reference scene `blendbsdf_delta`).
 
+use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_eval, hit};
 use crate::layout::*;
 use crate::shading::*;
@@ -55,8 +56,8 @@ pub fn blend_weight(
 }
 
 /// The weights of blend `root`'s levels 0 to 3 (x to w; 0 past its last blend), read once
-/// per vertex: `extend`'s choice and [`blend_eval`] both take them from here, so that a
-/// weight's texture lookup is inlined into the kernel once.
+/// per vertex: `extend`'s choice and [`blend_eval`] both take them from here (level k's
+/// is `component(weights, k)`), so that a weight's texture lookup is inlined once.
 #[kernel_fn]
 pub fn blend_weights(
     shading: u32,
@@ -85,20 +86,6 @@ pub fn blend_weights(
         level += 1;
     }
     weights
-}
-
-/// Level `level`'s entry of [`blend_weights`].
-#[kernel_fn]
-pub fn level_weight(weights: Vec4, level: u32) -> f32 {
-    if level == 0 {
-        weights.x
-    } else if level == 1 {
-        weights.y
-    } else if level == 2 {
-        weights.z
-    } else {
-        weights.w
-    }
 }
 
 /// [`blend_traits`]: some BSDF of the blend has a mask or a normal or bump map. Then each
@@ -169,7 +156,7 @@ pub fn blend_eval(
         let nested = m.blend != 0 && level < levels;
         let mut w = 0.0f32;
         if nested {
-            w = level_weight(weights, level);
+            w = component(weights, level);
         }
         let p = reach * (1.0 - w);
         if p > 0.0 && level != skip {
