@@ -41,7 +41,18 @@ fn pixel_order_is_a_permutation_in_z_order() {
         })
         .collect();
     assert_eq!(order, decoded);
-    for (w, h) in [(5, 3), (640, 480), (1, 7)] {
+    for (w, h) in [
+        (5, 3),
+        (640, 480),
+        (1, 7),
+        (1, 1),
+        (7, 1),
+        (3, 1000),
+        (1000, 3),
+        (257, 129),
+        (64, 64),
+        (1024, 1),
+    ] {
         let mut order = morton_pixel_order(w, h);
         let codes: Vec<u32> = order
             .iter()
