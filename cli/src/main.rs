@@ -13,7 +13,9 @@ use choices::{
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
 use cohort_render::provenance::Provenance;
-use cohort_render::{output, Budget, GpuScene, RenderOptions, Renderer, SceneBvh, Shard};
+use cohort_render::{
+    output, Budget, GpuScene, PreparedScene, RenderOptions, Renderer, SceneBvh, Shard,
+};
 use cohort_scenes::embedded;
 use options::Config;
 
@@ -362,7 +364,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
         output::check_destination(path).map_err(|e| e.to_string())?;
     }
     // The device opens on its own thread while the scene loads and (for one device) its
-    // BVH is built: neither needs the other.
+    // BVH is built (or read from the cache) and its arrays laid out: neither needs the
+    // other.
     let (scene, built, devices, opts, times) = std::thread::scope(|threads| {
         let opening = threads.spawn(|| {
             let devices = devices::open(a.backend.map(Backend::kind), a.devices.as_ref());
@@ -386,7 +389,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
             opts.check(w, h).map_err(|e| e.to_string())?;
             // Several devices: each renderer builds and uploads its own.
             let built = match a.devices {
-                None => Some(SceneBvh::build(&scene).map_err(|e| e.to_string())?),
+                None => {
+                    let built = SceneBvh::cached(&scene).map_err(|e| e.to_string())?;
+                    Some(PreparedScene::new(&scene, built))
+                }
                 Some(_) => None,
             };
             Ok::<_, String>((scene, scene_loaded, opts, built))
@@ -421,9 +427,11 @@ fn render(a: RenderArgs) -> Result<(), String> {
         .collect();
     // One device: the renderer is made here, so that its startup (BVH build, upload,
     // pipelines) is reported apart from the render. Several: one thread per device.
-    let mut single = match (devices.as_slice(), built) {
+    let bvh_cached = built.as_ref().is_some_and(|b| b.built.cached);
+    let arrays_time = built.as_ref().map_or(Duration::ZERO, |b| b.time);
+    let mut single = match (devices.as_slice(), &built) {
         ([device], Some(built)) => {
-            let gpu = GpuScene::upload_built(device, &scene, built).map_err(|e| e.to_string())?;
+            let gpu = GpuScene::upload_prepared(device, built).map_err(|e| e.to_string())?;
             Some(
                 Renderer::with_scene(device, &scene, gpu, opts.clone())
                     .map_err(|e| e.to_string())?,
@@ -436,6 +444,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
     };
     // Everything before the first iteration: the render starts right after this.
     let ready = process_start.elapsed();
+    // A BVH built for the cache is written while the scene renders (waited for on return).
+    let _saving = built.map(PreparedScene::save_beside);
     let startup = single.as_ref().map(|r| r.startup()).unwrap_or_default();
     eprintln!(
         "{} ({w}x{h}, {} triangles) on {} [{}], algorithm {}{}",
@@ -589,14 +599,18 @@ fn render(a: RenderArgs) -> Result<(), String> {
         // while the device opens on another, then upload and pipelines, and whatever the
         // renderer's set-up took besides (buffers, the frame).
         let parallel = times.bvh_built.max(times.device_opened);
-        let other = ready.saturating_sub(parallel + startup.upload + startup.pipelines);
+        let beside = startup.path_state.max(startup.pipelines);
+        let other = ready.saturating_sub(parallel + startup.upload + beside);
         println!(
-            "startup        {:.3} s to the first iteration: scene load {:.3} + BVH build {:.3} beside device {:.3}, then upload {:.3}, pipelines {:.3}{}, other {:.3} (shading {})",
+            "startup        {:.3} s to the first iteration: scene load {:.3} + BVH {} {:.3} + arrays {:.3} beside device {:.3}, then upload {:.3}, then path state {:.3} beside pipelines {:.3}{}, other {:.3} (shading {})",
             ready.as_secs_f64(),
             times.scene_loaded.as_secs_f64(),
+            if bvh_cached { "read from the cache" } else { "build" },
             startup.bvh_build.as_secs_f64(),
+            arrays_time.as_secs_f64(),
             times.device_opened.as_secs_f64(),
             startup.upload.as_secs_f64(),
+            startup.path_state.as_secs_f64(),
             startup.pipelines.as_secs_f64(),
             // The pipeline thread the others waited for, named without the type
             // parameters that follow `___` (`--stats` has them).
@@ -635,6 +649,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
             .iter()
             .map(|(name, t)| (name.clone(), t.as_secs_f64().into()))
             .collect();
+        let startup_json = serde_json::json!({ "to_first_iteration": ready.as_secs_f64(), "scene_load": times.scene_loaded.as_secs_f64(), "device": times.device_opened.as_secs_f64(),
+            "bvh_build": startup.bvh_build.as_secs_f64(), "bvh_cached": bvh_cached, "arrays": arrays_time.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "path_state": startup.path_state.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64(),
+            "kernels": kernels });
         let json = serde_json::json!({
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
@@ -647,9 +664,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "paths_per_second": stats.paths_per_second(), "rays_per_second": stats.rays_per_second(),
             "wall_s": stats.wall.as_secs_f64(), "outputs_s": written.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
-            "startup_s": { "to_first_iteration": ready.as_secs_f64(), "scene_load": times.scene_loaded.as_secs_f64(), "device": times.device_opened.as_secs_f64(),
-                "bvh_build": startup.bvh_build.as_secs_f64(), "upload": startup.upload.as_secs_f64(), "pipelines": startup.pipelines.as_secs_f64(),
-                "kernels": kernels },
+            "startup_s": startup_json,
             "shading": cohort_render::shading::label(startup.shading),
             "scene_integrator": {
                 "max_depth": scene.integrator.max_depth, "rr_depth": scene.integrator.rr_depth,

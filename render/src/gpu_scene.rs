@@ -51,6 +51,10 @@ pub struct SceneBvh {
     /// Its 8-wide form, where the traversal's stack holds the tree.
     pub wide: Option<GpuBvh8>,
     pub time: std::time::Duration,
+    /// Whether the tree came from Cohort's cache folder ([`crate::bvh_cache`]).
+    pub cached: bool,
+    /// Where [`SceneBvh::save`] keeps a tree that was built, not read, when caching is on.
+    pub save_to: Option<std::path::PathBuf>,
 }
 
 impl SceneBvh {
@@ -64,7 +68,42 @@ impl SceneBvh {
             bvh,
             wide,
             time: started.elapsed(),
+            cached: false,
+            save_to: None,
         })
+    }
+
+    /// [`SceneBvh::build`] through Cohort's cache folder ([`crate::bvh_cache`]): a large
+    /// scene's tree is read back from there when a run has built it before. A tree built
+    /// here is not written yet: [`SceneBvh::save`] does that, off the path to the first
+    /// iteration (a large tree takes tens of milliseconds to write). The tree is the same
+    /// either way.
+    pub fn cached(scene: &Scene) -> Result<SceneBvh, crate::RenderError> {
+        let started = std::time::Instant::now();
+        let Some(file) = crate::bvh_cache::file_for(scene) else {
+            return SceneBvh::build(scene);
+        };
+        if let Some((bvh, wide)) = crate::bvh_cache::load(&file, scene) {
+            return Ok(SceneBvh {
+                bvh,
+                wide,
+                time: started.elapsed(),
+                cached: true,
+                save_to: None,
+            });
+        }
+        Ok(SceneBvh {
+            save_to: Some(file),
+            ..SceneBvh::build(scene)?
+        })
+    }
+
+    /// Writes a tree [`SceneBvh::cached`] built into the cache folder (nothing for one it
+    /// read, or when caching is off).
+    pub fn save(&self) {
+        if let Some(file) = &self.save_to {
+            crate::bvh_cache::save(file, &self.bvh, self.wide.as_ref());
+        }
     }
 }
 
@@ -75,19 +114,7 @@ impl GpuScene {
         scene: &Scene,
     ) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
         let built = SceneBvh::build(scene)?;
-        GpuScene::upload_built(device, scene, built)
-    }
-
-    /// Uploads a scene whose BVH was built already (on the host, without a device: a
-    /// caller can build it while the device opens).
-    pub fn upload_built(
-        device: &Device,
-        scene: &Scene,
-        built: SceneBvh,
-    ) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
-        let mut gpu = GpuScene::upload_with(device, scene, &built.bvh, built.wide.as_ref())?;
-        gpu.bvh_build = built.time;
-        Ok(std::sync::Arc::new(gpu))
+        GpuScene::upload_prepared(device, &PreparedScene::new(scene, built))
     }
 
     /// Uploads `bvh` and its 8-wide form (built here).
@@ -103,7 +130,130 @@ impl GpuScene {
         wide: Option<&GpuBvh8>,
     ) -> Result<GpuScene, RuntimeError> {
         let started = std::time::Instant::now();
-        let nodes: &[BvhNode] = &bvh.nodes;
+        let arrays = SceneArrays::prepare(scene, bvh);
+        let mut gpu = GpuScene::upload_arrays(device, &arrays, bvh, wide)?;
+        gpu.upload = started.elapsed();
+        Ok(gpu)
+    }
+
+    /// Uploads a scene laid out already ([`PreparedScene`], made on the host without a
+    /// device: a caller can make it while the device opens).
+    pub fn upload_prepared(
+        device: &Device,
+        prepared: &PreparedScene,
+    ) -> Result<std::sync::Arc<GpuScene>, crate::RenderError> {
+        let PreparedScene { built, arrays, .. } = prepared;
+        let started = std::time::Instant::now();
+        let mut gpu = GpuScene::upload_arrays(device, arrays, &built.bvh, built.wide.as_ref())?;
+        gpu.upload = started.elapsed();
+        gpu.bvh_build = built.time;
+        Ok(std::sync::Arc::new(gpu))
+    }
+
+    /// Uploads the arrays, the large ones each on a thread of its own: copying into
+    /// staging memory and allocating run side by side, and only the copy commands queue
+    /// one after another.
+    fn upload_arrays(
+        device: &Device,
+        a: &SceneArrays,
+        bvh: &GpuBvh,
+        wide: Option<&GpuBvh8>,
+    ) -> Result<GpuScene, RuntimeError> {
+        std::thread::scope(|t| {
+            let triangles = t.spawn(|| upload(device, &a.triangles));
+            let normals = t.spawn(|| upload(device, &a.normals));
+            let nodes = t.spawn(|| upload(device, &bvh.nodes));
+            let nodes8 = t.spawn(|| {
+                wide.map(|w| upload::<WideNode>(device, &w.nodes))
+                    .transpose()
+            });
+            let tex_coords = t.spawn(|| upload(device, &a.tex_coords));
+            let textures = t.spawn(|| upload(device, &a.textures));
+            let materials = upload(device, &a.materials)?;
+            let lights = upload(device, &a.lights.entries)?;
+            let delta_lights = upload(device, &a.lights.delta)?;
+            Ok(GpuScene {
+                shading: a.shading,
+                tex_coords: joined(tex_coords)?,
+                textures: joined(textures)?,
+                env_map: a.env_map,
+                nodes: joined(nodes)?,
+                triangles: joined(triangles)?,
+                materials,
+                has_shading_normals: !a.normals.is_empty(),
+                shading_normals: joined(normals)?,
+                triangle_count: a.triangles.len(),
+                lights,
+                delta_lights,
+                light_count: a.lights.count,
+                env_light: a.lights.env_light,
+                bvh_build: std::time::Duration::ZERO,
+                upload: std::time::Duration::ZERO,
+                bounds: [bvh.bounds_min, bvh.bounds_max],
+                nodes8: joined(nodes8)?,
+            })
+        })
+    }
+}
+
+/// A scene's BVH with every other array the kernels read, laid out on the host: all of
+/// [`GpuScene`]'s work that needs no device.
+pub struct PreparedScene {
+    pub built: SceneBvh,
+    arrays: SceneArrays,
+    /// Host time spent laying out the arrays besides the trees.
+    pub time: std::time::Duration,
+}
+
+impl PreparedScene {
+    pub fn new(scene: &Scene, built: SceneBvh) -> PreparedScene {
+        let started = std::time::Instant::now();
+        let arrays = SceneArrays::prepare(scene, &built.bvh);
+        PreparedScene {
+            built,
+            arrays,
+            time: started.elapsed(),
+        }
+    }
+}
+
+impl PreparedScene {
+    /// Writes a tree that was built for the cache ([`SceneBvh::save`]) on a thread of its
+    /// own, once the scene is on the device; the returned guard waits for it when dropped,
+    /// so that a run ends with the file whole.
+    pub fn save_beside(self) -> Saving {
+        Saving(
+            (self.built.save_to.is_some()).then(|| std::thread::spawn(move || self.built.save())),
+        )
+    }
+}
+
+/// A BVH being written to the cache ([`PreparedScene::save_beside`]); dropping it waits.
+pub struct Saving(Option<std::thread::JoinHandle<()>>);
+
+impl Drop for Saving {
+    fn drop(&mut self) {
+        if let Some(h) = self.0.take() {
+            let _ = h.join();
+        }
+    }
+}
+
+/// The arrays of [`GpuScene`] besides the trees, in the kernels' layouts.
+struct SceneArrays {
+    /// The BVH's triangles with their light densities (`crate::lights`).
+    triangles: Vec<Triangle>,
+    lights: crate::lights::LightTable,
+    materials: Vec<Material>,
+    normals: Vec<glam::Vec4>,
+    tex_coords: Vec<glam::Vec4>,
+    textures: Vec<glam::Vec4>,
+    env_map: u32,
+    shading: u32,
+}
+
+impl SceneArrays {
+    fn prepare(scene: &Scene, bvh: &GpuBvh) -> SceneArrays {
         let mut tris: Vec<Triangle> = bvh.triangles.clone();
         let lights = crate::lights::build(scene, &mut tris);
         let mats = scene.gpu_materials();
@@ -160,30 +310,22 @@ impl GpuScene {
         let has_delta = (lights.entries.iter().take(lights.count as usize))
             .any(|e| e.tri & delta != 0 || e.alias_tri & delta != 0);
         let shading = cohort_kernels::shading::shading_set(&mats, has_delta, env_map != 0);
-        Ok(GpuScene {
-            shading,
-            tex_coords: upload(device, &tex_coords)?,
-            textures: upload(device, &textures)?,
+        SceneArrays {
+            triangles: tris,
+            lights,
+            materials: mats,
+            normals,
+            tex_coords,
+            textures,
             env_map,
-            nodes: upload(device, nodes)?,
-            triangles: upload(device, &tris)?,
-            materials: upload(device, &mats)?,
-            has_shading_normals: !normals.is_empty(),
-            shading_normals: upload(device, &normals)?,
-            triangle_count: tris.len(),
-            lights: upload(device, &lights.entries)?,
-            delta_lights: upload(device, &lights.delta)?,
-            light_count: lights.count,
-            env_light: lights.env_light,
-            bvh_build: std::time::Duration::ZERO,
-            upload: started.elapsed(),
-            bounds: [bvh.bounds_min, bvh.bounds_max],
-            nodes8: match wide {
-                Some(w) => Some(upload::<WideNode>(device, &w.nodes)?),
-                None => None,
-            },
-        })
+            shading,
+        }
     }
+}
+
+/// The result of an upload thread.
+fn joined<T>(h: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    h.join().expect("an upload thread panicked")
 }
 
 /// `Device::upload`, with one zeroed element in place of an empty array: a kernel's binding must

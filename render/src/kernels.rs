@@ -6,7 +6,7 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use cohort::runtime::{BackendKind, KernelArtifact};
+use cohort::runtime::{BackendKind, Device, KernelArtifact};
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
@@ -24,7 +24,8 @@ use crate::design::Choice;
 use crate::paths::SortState;
 use crate::queues::{plan, QueueState};
 use crate::{
-    Budget, GpuScene, InPatch, IntegratorKind, RenderError, RenderStats, Renderer, Shading,
+    Budget, GpuScene, InPatch, IntegratorKind, RenderError, RenderOptions, RenderStats, Renderer,
+    Shading,
 };
 
 /// An operation over the kernels of the current options (see `Renderer::with_kernels`).
@@ -66,41 +67,59 @@ pub(crate) struct Specs {
     pub(crate) queues: queues::Specs,
 }
 
-impl Renderer<'_> {
-    /// Runs `op` with the kernel types of the current options: the diffuse strategy `S`,
-    /// the path-end policy `E` and the integrator `I` are chosen here, once, from the
-    /// options, for every operation that needs them.
-    pub(crate) fn with_kernels<O: KernelOp>(&mut self, op: O) -> O::Out {
-        match (self.opts.algorithm.coherent, self.opts.in_patch) {
-            (false, _) => self.with_sampler::<Cosine, O>(op),
-            (true, InPatch::Uniform) => self.with_sampler::<CoherentUniform, O>(op),
-            (true, InPatch::Cosine) => self.with_sampler::<CoherentCosine, O>(op),
-            (true, InPatch::EqualArea) => self.with_sampler::<CoherentEqualArea, O>(op),
-        }
-    }
+/// An operation over the kernel types of a set of options (see [`with_types`]).
+pub(crate) trait TypedOp {
+    type Out;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self) -> Self::Out;
+}
 
-    pub(crate) fn with_sampler<S: DiffuseSampler, O: KernelOp>(&mut self, op: O) -> O::Out {
-        match self.opts.whole_group_end {
-            Some(_) => self.with_end::<S, WholeGroup, O>(op),
-            None => self.with_end::<S, EachPath, O>(op),
-        }
+/// Runs `op` with the kernel types of `opts`: the diffuse strategy `S`, the path-end policy
+/// `E` and the integrator `I` are chosen here, once, from the options, for every operation
+/// that needs them.
+pub(crate) fn with_types<O: TypedOp>(opts: &RenderOptions, op: O) -> O::Out {
+    match (opts.algorithm.coherent, opts.in_patch) {
+        (false, _) => sampler_types::<Cosine, O>(opts, op),
+        (true, InPatch::Uniform) => sampler_types::<CoherentUniform, O>(opts, op),
+        (true, InPatch::Cosine) => sampler_types::<CoherentCosine, O>(opts, op),
+        (true, InPatch::EqualArea) => sampler_types::<CoherentEqualArea, O>(opts, op),
     }
+}
 
-    fn with_end<S: DiffuseSampler, E: PathEnd, O: KernelOp>(&mut self, op: O) -> O::Out {
-        match self.opts.integrator {
-            IntegratorKind::Path => op.run::<S, E, Implicit>(self),
-            IntegratorKind::Nee => op.run::<S, E, NextEvent>(self),
-        }
+/// [`with_types`] with the diffuse strategy chosen (by the options or by a caller).
+fn sampler_types<S: DiffuseSampler, O: TypedOp>(opts: &RenderOptions, op: O) -> O::Out {
+    match opts.whole_group_end {
+        Some(_) => end_types::<S, WholeGroup, O>(opts, op),
+        None => end_types::<S, EachPath, O>(opts, op),
     }
+}
 
-    /// The specialisations of every kernel an iteration may record, for this device and
-    /// the options' group level.
-    pub(crate) fn specs(&self) -> Specs {
-        let d = self.device;
+fn end_types<S: DiffuseSampler, E: PathEnd, O: TypedOp>(opts: &RenderOptions, op: O) -> O::Out {
+    match opts.integrator {
+        IntegratorKind::Path => op.run::<S, E, Implicit>(),
+        IntegratorKind::Nee => op.run::<S, E, NextEvent>(),
+    }
+}
+
+/// A [`KernelOp`] with its renderer.
+struct OnRenderer<'r, 'd, O> {
+    r: &'r mut Renderer<'d>,
+    op: O,
+}
+
+impl<O: KernelOp> TypedOp for OnRenderer<'_, '_, O> {
+    type Out = O::Out;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self) -> O::Out {
+        self.op.run::<S, E, I>(self.r)
+    }
+}
+
+impl Specs {
+    /// The specialisations for device `d` and the options' group level.
+    pub(crate) fn new(d: &Device, group: cohort::Group) -> Specs {
         Specs {
             traverse: traverse::spec(d, None),
             traverse8: traverse8::spec(d, None),
-            extend: extend::spec(d, Some(self.opts.algorithm.group)),
+            extend: extend::spec(d, Some(group)),
             shadow: trace_shadow::spec(d, None),
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
@@ -108,38 +127,123 @@ impl Renderer<'_> {
             queues: queues::specs(d),
         }
     }
+}
+
+impl Renderer<'_> {
+    /// Runs `op` with the kernel types of the current options ([`with_types`]).
+    pub(crate) fn with_kernels<O: KernelOp>(&mut self, op: O) -> O::Out {
+        let opts = self.opts.clone();
+        with_types(&opts, OnRenderer { r: self, op })
+    }
+
+    /// [`with_kernels`](Self::with_kernels) with the diffuse strategy `S` of a caller.
+    pub(crate) fn with_sampler<S: DiffuseSampler, O: KernelOp>(&mut self, op: O) -> O::Out {
+        let opts = self.opts.clone();
+        sampler_types::<S, _>(&opts, OnRenderer { r: self, op })
+    }
+
+    /// The specialisations of every kernel an iteration may record, for this device and
+    /// the options' group level.
+    pub(crate) fn specs(&self) -> Specs {
+        Specs::new(self.device, self.opts.algorithm.group)
+    }
 
     /// Compiles the pipelines of every kernel the options use (driver compilation, which
     /// the on-disk pipeline cache shortens on later runs), so that no render pays for it.
     pub(crate) fn prepare_kernels<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &mut self,
     ) -> Result<(), RenderError> {
+        let compiled = Compile {
+            d: self.device,
+            opts: &self.opts,
+            shading: extend_set(&self.scene, &self.frame),
+            wide: self.scene.nodes8.is_some(),
+        }
+        .run::<S, E, I>()?;
+        self.adopt(compiled)
+    }
+
+    /// Takes what [`Compile`] made (the design and the pipeline threads' times) and
+    /// allocates the state of the stages it chose.
+    pub(crate) fn adopt(&mut self, compiled: Compiled) -> Result<(), RenderError> {
         let started = Instant::now();
         let d = self.device;
         let specs = self.specs();
         self.startup.shading = self.scene.shading;
         let shading = extend_set(&self.scene, &self.frame);
-        let wide = self.scene.nodes8.is_some();
-        let compact = self.opts.compact;
-        let reorder = self.opts.reorder > 0;
+        let queue_sets = plan(shading).sets;
+        let queued = match compiled.design {
+            Choice::Fixed(q) => q,
+            Choice::Trial(_) => true,
+        };
+        self.design = compiled.design;
+        self.startup.kernels = compiled.kernels;
+        if self.opts.reorder > 0 && self.paths.sort.is_none() {
+            self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
+        }
+        // The queues' dispatches are sized for the group level's workgroup.
+        let wgs = specs.extend.workgroup_size;
+        let stale = |q: &QueueState| {
+            q.plan.table[queues::BLEND_ENTRY + 2] != wgs || q.plan.sets != queue_sets
+        };
+        if queued && self.paths.queues.as_ref().is_none_or(stale) {
+            self.paths.queues = Some(QueueState::new(d, self.frame.slots, shading, wgs)?);
+        }
+        self.startup.pipelines += compiled.time + started.elapsed();
+        Ok(())
+    }
+}
+
+/// Building and creating the pipelines of every kernel a render with these options may
+/// record. It needs the device, the options and two facts of the scene, not a renderer,
+/// so that a new renderer compiles beside allocating its path state.
+pub(crate) struct Compile<'a> {
+    pub(crate) d: &'a Device,
+    pub(crate) opts: &'a RenderOptions,
+    /// `extend`'s set ([`extend_set`]).
+    pub(crate) shading: u32,
+    /// Whether the scene has its 8-wide tree (`GpuScene::nodes8`).
+    pub(crate) wide: bool,
+}
+
+/// What [`Compile`] made.
+pub(crate) struct Compiled {
+    design: Choice,
+    /// Each pipeline thread's kernels and time, longest first (`Startup::kernels`).
+    kernels: Vec<(String, Duration)>,
+    time: Duration,
+}
+
+impl TypedOp for Compile<'_> {
+    type Out = Result<Compiled, RenderError>;
+    fn run<S: DiffuseSampler, E: PathEnd, I: Integrator>(self) -> Self::Out {
+        let started = Instant::now();
+        let Compile {
+            d,
+            opts: o,
+            shading,
+            wide,
+        } = self;
+        let specs = Specs::new(d, o.algorithm.group);
+        let compact = o.compact;
+        let reorder = o.reorder > 0;
         let queue_sets = plan(shading).sets;
         let info = d.info();
         // `Auto` measures both designs where the choice cannot change the image and
         // timestamps can tell them apart (`crate::design`); the CPU backend and the
         // software driver would only pay for the partition and for more compilation.
-        let o = &self.opts;
         let trial = queue_sets.len() > 1
             && o.per_path_sampling()
             && info.timestamps
             && !info.software_driver
             && info.backend != BackendKind::Cpu;
-        self.design = match o.shading {
+        let design = match o.shading {
             Shading::Kernel => Choice::Fixed(false),
             Shading::Queues => Choice::Fixed(true),
             Shading::Auto if trial => Choice::Trial(Default::default()),
             Shading::Auto => Choice::Fixed(false),
         };
-        let (one, queued) = match self.design {
+        let (one, queued) = match design {
             Choice::Fixed(q) => (!q, q),
             Choice::Trial(_) => (true, true),
         };
@@ -213,20 +317,11 @@ impl Renderer<'_> {
                 .collect::<Result<Vec<_>, _>>()
         })?;
         kernels.sort_by_key(|k| std::cmp::Reverse(k.1));
-        self.startup.kernels = kernels;
-        if reorder && self.paths.sort.is_none() {
-            self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
-        }
-        // The queues' dispatches are sized for the group level's workgroup.
-        let wgs = specs.extend.workgroup_size;
-        let stale = |q: &QueueState| {
-            q.plan.table[queues::BLEND_ENTRY + 2] != wgs || q.plan.sets != queue_sets
-        };
-        if queued && self.paths.queues.as_ref().is_none_or(stale) {
-            self.paths.queues = Some(QueueState::new(d, self.frame.slots, shading, wgs)?);
-        }
-        self.startup.pipelines += started.elapsed();
-        Ok(())
+        Ok(Compiled {
+            design,
+            kernels,
+            time: started.elapsed(),
+        })
     }
 }
 

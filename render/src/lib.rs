@@ -5,6 +5,7 @@
 //! EXRs ([`provenance`] in the header, path counts per pixel) [`input`] reads back and
 //! [`merge`] combines; [`multi_device`] does both in one process, on several devices.
 
+pub mod bvh_cache;
 mod design;
 mod error;
 pub mod gpu_scene;
@@ -28,7 +29,7 @@ pub mod validate;
 pub mod wavefront;
 
 pub use cohort_kernels::shading;
-pub use gpu_scene::{GpuScene, SceneBvh};
+pub use gpu_scene::{GpuScene, PreparedScene, SceneBvh};
 pub use image::Image;
 pub use renderer::{
     Algorithm, Budget, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,

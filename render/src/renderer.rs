@@ -22,7 +22,7 @@ use glam::{Vec3, Vec4};
 
 use crate::design::Choice;
 use crate::iteration::{LabelledBatch, Stage, Wavefront};
-use crate::kernels::{Advance, Prepare};
+use crate::kernels::{extend_set, with_types, Advance, Compile, Prepare};
 use crate::options::validate;
 use crate::paths::Paths;
 use crate::{GpuScene, Image};
@@ -150,12 +150,31 @@ impl<'d> Renderer<'d> {
         };
         apply_camera(&mut frame, &camera);
         apply_options(&mut frame, &opts);
-        let allocated = Instant::now();
-        let slot_to_pixel = slot_order(w, h, opts.interleave).repeat(copies as usize);
-        let paths = Paths::alloc(device, &slot_to_pixel, &camera)?;
+        // The path state is laid out and allocated on one thread while the pipelines are
+        // built and created on others: neither needs the other.
+        let compile = Compile {
+            d: device,
+            opts: &opts,
+            shading: extend_set(&gpu, &frame),
+            wide: gpu.nodes8.is_some(),
+        };
+        let (allocated, compiled) = std::thread::scope(|t| {
+            let allocating = t.spawn(|| {
+                let started = Instant::now();
+                let slot_to_pixel = slot_order(w, h, opts.interleave).repeat(copies as usize);
+                let paths = Paths::alloc(device, &slot_to_pixel, &camera);
+                (paths, slot_to_pixel, started.elapsed())
+            });
+            let compiled = with_types(&opts, compile);
+            let allocated = allocating.join().expect("the path-state thread panicked");
+            (allocated, compiled)
+        });
+        let (paths, slot_to_pixel, path_state) = allocated;
+        let (paths, compiled) = (paths?, compiled?);
         let startup = Startup {
             bvh_build: gpu.bvh_build,
-            upload: gpu.upload + allocated.elapsed(),
+            upload: gpu.upload,
+            path_state,
             pipelines: Duration::ZERO,
             kernels: Vec::new(),
             shading: gpu.shading,
@@ -172,7 +191,7 @@ impl<'d> Renderer<'d> {
             startup,
             design: Choice::Fixed(false),
         };
-        r.with_kernels(Prepare)?;
+        r.adopt(compiled)?;
         Ok(r)
     }
 
@@ -611,6 +630,9 @@ fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
 /// Pixel of every ray slot. Interleaved sampling: slot g renders pixel D * Morton(g)
 /// (mod the size), which spreads a group's block of pixels over the image.
 fn slot_order(w: u32, h: u32, d: u32) -> Vec<u32> {
+    if d == 1 {
+        return morton_pixel_order(w, h);
+    }
     morton_pixel_order(w, h)
         .into_iter()
         .map(|p| {

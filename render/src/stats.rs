@@ -104,8 +104,10 @@ impl RenderStats {
 pub struct Startup {
     /// BVH build (binary and 8-wide) on the host.
     pub bvh_build: Duration,
-    /// Uploading the scene and allocating the path state.
+    /// Uploading the scene.
     pub upload: Duration,
+    /// Laying out and allocating the path state, beside `pipelines`.
+    pub path_state: Duration,
     /// Pipeline creation of the kernels the options use (prepared before any render).
     pub pipelines: Duration,
     /// Each pipeline thread's kernels (artifact names, `+`-joined) and the time it took to

@@ -9,19 +9,28 @@
 
 use std::path::PathBuf;
 
+/// Cohort's cache folder: `$COHORT_CACHE_DIR`, else `$XDG_CACHE_HOME/cohort`, else
+/// `$HOME/.cache/cohort`; `None` when caching is off (`COHORT_CACHE_DIR=off`) or no folder
+/// is known. The Vulkan backend keeps its pipelines there, the renderer its scenes' BVHs.
+pub fn cache_dir() -> Option<PathBuf> {
+    match std::env::var_os("COHORT_CACHE_DIR") {
+        Some(d) if d == "off" => None,
+        Some(d) => Some(PathBuf::from(d)),
+        None => match std::env::var_os("XDG_CACHE_HOME") {
+            Some(x) if !x.is_empty() => Some(PathBuf::from(x).join("cohort")),
+            _ => Some(
+                PathBuf::from(std::env::var_os("HOME")?)
+                    .join(".cache")
+                    .join("cohort"),
+            ),
+        },
+    }
+}
+
 /// The cache file for a device named `device`, or `None` when caching is off or no folder
 /// is known.
 pub(crate) fn file_for(device: &str) -> Option<PathBuf> {
-    let dir = match std::env::var_os("COHORT_CACHE_DIR") {
-        Some(d) if d == "off" => return None,
-        Some(d) => PathBuf::from(d),
-        None => match std::env::var_os("XDG_CACHE_HOME") {
-            Some(x) if !x.is_empty() => PathBuf::from(x).join("cohort"),
-            _ => PathBuf::from(std::env::var_os("HOME")?)
-                .join(".cache")
-                .join("cohort"),
-        },
-    };
+    let dir = cache_dir()?;
     let name: String = device
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })

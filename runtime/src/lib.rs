@@ -46,6 +46,7 @@ pub use buffer::{BufferArg, GpuBuffer};
 pub use device::{
     Batch, Completed, Device, DeviceInfo, Dispatch, DispatchStats, ReadBack, Submission,
 };
+pub use disk_cache::cache_dir;
 pub use error::{Result, RuntimeError};
 
 /// Which GPU API a [`Device`] drives.

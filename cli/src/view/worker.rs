@@ -10,7 +10,9 @@ use std::time::{Duration, Instant};
 
 use cohort::runtime::{Device, GpuBuffer};
 use cohort_render::provenance::Provenance;
-use cohort_render::{output, Budget, GpuScene, RenderOptions, RenderStats, Renderer};
+use cohort_render::{
+    output, Budget, GpuScene, PreparedScene, RenderOptions, RenderStats, Renderer, SceneBvh,
+};
 use cohort_scenes::{Camera, Scene};
 
 /// GPU time one slice aims at: a new image about 30 times a second.
@@ -116,7 +118,12 @@ pub fn run(
         device.info().adapter_name,
         device.info().backend.name()
     ));
-    let gpu = GpuScene::prepare(&device, &setup.scene).map_err(|e| e.to_string())?;
+    // Through the BVH cache, as `cohort render`: a large scene's window opens sooner.
+    let built = SceneBvh::cached(&setup.scene).map_err(|e| e.to_string())?;
+    let prepared = PreparedScene::new(&setup.scene, built);
+    let gpu = GpuScene::upload_prepared(&device, &prepared).map_err(|e| e.to_string())?;
+    // A tree built here is written to the cache while the window renders.
+    let _saving = prepared.save_beside();
     let mut sides = setup
         .options
         .iter()
