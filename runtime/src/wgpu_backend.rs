@@ -56,10 +56,11 @@ pub(crate) struct WgpuDevice {
     max_buffer_size: u64,
     timestamp_period_ns: f64,
     messages: Arc<Mutex<Vec<String>>>,
-    /// Held while a pipeline is created: wgpu's error scopes (which catch its validation
-    /// errors) are one stack per device in this build (its `std` feature, which makes them
-    /// per thread, is off), so pipelines of one device are created one at a time here.
-    creating: Mutex<()>,
+    /// Held by every [`Scope`]: wgpu's error scopes (which catch its validation errors)
+    /// are one stack per device in this build (its `std` feature, which makes them per
+    /// thread, is off), so threads that create pipelines or buffers or record batches on
+    /// one device take turns from push to pop.
+    scopes: Mutex<()>,
 }
 
 const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
@@ -209,7 +210,7 @@ impl WgpuDevice {
             device,
             queue,
             messages,
-            creating: Mutex::new(()),
+            scopes: Mutex::new(()),
         })
     }
 
@@ -220,7 +221,6 @@ impl WgpuDevice {
     }
 
     fn create_pipeline(&self, kernel: &KernelArtifact) -> Result<Pipeline> {
-        let _one_at_a_time = self.creating.lock().unwrap_or_else(|e| e.into_inner());
         let fail = |detail: String| RuntimeError::ShaderCompilation {
             kernel: kernel.name.clone(),
             backend: BACKEND,
@@ -239,7 +239,7 @@ impl WgpuDevice {
         if wgsl.trim().is_empty() {
             return Err(fail("the artifact has no WGSL code".into()));
         }
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         let desc = wgpu::ShaderModuleDescriptor {
             label: Some(&kernel.name),
             source: wgpu::ShaderSource::Wgsl(strip_subgroups_enable(wgsl)),
@@ -326,7 +326,7 @@ impl WgpuDevice {
             detail,
         };
         let n = cmds.len() as u32;
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         let queries = (self.info.timestamps && n > 0).then(|| {
             self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("cohort timestamps"),
@@ -407,7 +407,7 @@ impl WgpuDevice {
         // buffer would only add a second, less helpful error.
         scope.pop().map_err(fail)?;
 
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         let index = self.queue.submit([command_buffer]);
         scope.pop().map_err(fail)?;
         // Mapping requests complete once the device is polled past this submission.
@@ -555,18 +555,22 @@ fn vulkan_default_subgroup_size(adapter: &wgpu::Adapter) -> Option<u32> {
 
 /// A validation scope nested in an internal-error scope, popped together: the first error
 /// either caught (validation first, as it is the one user code triggers) as its message.
-struct Scope {
+/// It holds the device's `scopes` lock from push to pop.
+struct Scope<'a> {
     internal: wgpu::ErrorScopeGuard,
     validation: wgpu::ErrorScopeGuard,
+    _one_at_a_time: std::sync::MutexGuard<'a, ()>,
 }
 
-impl Scope {
-    fn push(device: &wgpu::Device) -> Self {
-        let internal = device.push_error_scope(wgpu::ErrorFilter::Internal);
-        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+impl<'a> Scope<'a> {
+    fn push(d: &'a WgpuDevice) -> Self {
+        let one_at_a_time = d.scopes.lock().unwrap_or_else(|e| e.into_inner());
+        let internal = d.device.push_error_scope(wgpu::ErrorFilter::Internal);
+        let validation = d.device.push_error_scope(wgpu::ErrorFilter::Validation);
         Scope {
             internal,
             validation,
+            _one_at_a_time: one_at_a_time,
         }
     }
 
@@ -615,7 +619,7 @@ impl Backend for WgpuDevice {
                 detail: format!("the device's max_buffer_size is {}", self.max_buffer_size),
             });
         }
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: None,
             size: bytes,
@@ -664,7 +668,7 @@ impl Backend for WgpuDevice {
                 bytes: bytes.len() as u64,
             });
         }
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         // Staged by wgpu and executed before the next submission, which keeps it ordered
         // before any later dispatch or read.
         self.queue.write_buffer(buffer, offset, bytes);
@@ -683,7 +687,7 @@ impl Backend for WgpuDevice {
         }
         // Allocations are multiples of 16 bytes, so the rounded copy stays inside.
         let size = round_up(dst.len() as u64, wgpu::COPY_BUFFER_ALIGNMENT);
-        let scope = Scope::push(&self.device);
+        let scope = Scope::push(self);
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("cohort readback"),
             size,

@@ -67,6 +67,36 @@ fn alloc_is_zeroed_and_write_lands_at_offset() {
     }
 }
 
+/// A `Device` is shared by threads (the renderer uploads a scene's arrays and allocates its
+/// path state beside creating pipelines): uploads, allocations, reads and pipeline creation
+/// from several threads at once must each do what they do alone.
+#[test]
+fn threads_share_a_device() {
+    for dev in devices() {
+        std::thread::scope(|t| {
+            for k in 0..6u32 {
+                let dev = &dev;
+                t.spawn(move || {
+                    for round in 0..8u32 {
+                        let data: Vec<u32> =
+                            (0..1000 + 37 * k).map(|i| i ^ (k << 16) ^ round).collect();
+                        let up = dev.upload(&data).unwrap();
+                        let zero: GpuBuffer<u32> = dev.alloc(513 + k as usize).unwrap();
+                        assert_eq!(dev.read(&up).unwrap(), data, "{dev:?} thread {k}");
+                        assert!(dev.read(&zero).unwrap().iter().all(|&v| v == 0), "{dev:?}");
+                    }
+                });
+            }
+            let dev = &dev;
+            t.spawn(move || {
+                let y = run_saxpy(dev, 2.0, &[1.0, 2.0, 3.0], &[0.5, 0.5, 0.5]);
+                assert_eq!(y, vec![2.5, 4.5, 6.5], "{dev:?}");
+            });
+        });
+        assert_validation_clean(&dev);
+    }
+}
+
 const SAXPY: &str = "
 struct Params { a: f32, n: u32 }
 @group(0) @binding(0) var<uniform> params: Params;
