@@ -236,6 +236,40 @@ mod tests {
     }
 
     #[test]
+    fn the_newest_trees_stay() {
+        let dir = std::env::temp_dir().join(format!("cohort-bvh-keep-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let old = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+        for i in 0..KEEP + 4 {
+            let f = dir.join(format!("bvh-{i:016x}.bin"));
+            std::fs::write(&f, b"x").unwrap();
+            // Older first: file i was written i seconds after the first.
+            let t = old + std::time::Duration::from_secs(i as u64);
+            std::fs::File::options()
+                .write(true)
+                .open(&f)
+                .unwrap()
+                .set_modified(t)
+                .unwrap();
+        }
+        std::fs::write(dir.join("vk-pipelines-x.bin"), b"pipelines").unwrap();
+        save(&dir.join("bvh-new.bin"), &GpuBvh::default(), None);
+        let mut left: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        // The five oldest trees went; the new one and other files stayed.
+        let mut expected: Vec<String> =
+            (5..KEEP + 4).map(|i| format!("bvh-{i:016x}.bin")).collect();
+        expected.push("bvh-new.bin".into());
+        expected.push("vk-pipelines-x.bin".into());
+        expected.sort();
+        assert_eq!(left, expected);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn the_name_follows_the_geometry() {
         let scene = scan();
         let mut moved = scene.clone();
