@@ -9,8 +9,9 @@
 //! anything else is a miss, and the tree is built as if there were no cache. The builder is
 //! deterministic, so a cached tree is the one a build would give, and so is the image.
 //! Files are written through a temporary file and a rename; the [`KEEP`] most recently
-//! written stay.
+//! written stay, and a killed write's temporary file is removed by a later save.
 
+use cohort::runtime::hash64;
 use cohort_kernels::layout::{BvhNode, Triangle, WideNode};
 use cohort_scenes::{GpuBvh, GpuBvh8, Scene};
 use std::path::{Path, PathBuf};
@@ -22,23 +23,10 @@ const FORMAT: u32 = 1;
 pub const MIN_TRIANGLES: usize = 8192;
 /// Cached trees kept in the folder (each about 100 bytes per triangle).
 const KEEP: usize = 16;
+/// A temporary file this old is left from a killed write (writing one takes well under a
+/// second) and is removed by the next save.
+const STALE: std::time::Duration = std::time::Duration::from_secs(600);
 const MAGIC: &[u8; 8] = b"COHBVH\0\0";
-
-/// A stable 64-bit hash (not cryptographic: it names files and catches torn or damaged
-/// ones; a file's triangles are compared with the scene's before it is used).
-fn hash(words: &[u8], seed: u64) -> u64 {
-    const K: u64 = 0x9e37_79b9_7f4a_7c15;
-    let mut h = seed ^ (words.len() as u64).wrapping_mul(K);
-    let mut chunks = words.chunks_exact(8);
-    for c in &mut chunks {
-        let w = u64::from_le_bytes(c.try_into().expect("8 bytes"));
-        h = (h ^ w).wrapping_mul(K).rotate_left(29);
-    }
-    for &b in chunks.remainder() {
-        h = (h ^ b as u64).wrapping_mul(K).rotate_left(29);
-    }
-    h ^ (h >> 32)
-}
 
 /// The cache file for `scene`'s geometry, or `None` when caching is off or the scene is
 /// too small to be worth it.
@@ -47,9 +35,9 @@ pub fn file_for(scene: &Scene) -> Option<PathBuf> {
     if tris.len() < MIN_TRIANGLES {
         return None;
     }
-    let seed = hash(env!("CARGO_PKG_VERSION").as_bytes(), FORMAT as u64);
-    let h = hash(bytemuck::cast_slice(&tris.positions), seed);
-    let key = hash(bytemuck::cast_slice(&tris.materials), h);
+    let seed = hash64(FORMAT as u64, env!("CARGO_PKG_VERSION").as_bytes());
+    let h = hash64(seed, bytemuck::cast_slice(&tris.positions));
+    let key = hash64(h, bytemuck::cast_slice(&tris.materials));
     Some(cohort::runtime::cache_dir()?.join(format!("bvh-{key:016x}.bin")))
 }
 
@@ -85,7 +73,7 @@ fn encode(bvh: &GpuBvh, wide: Option<&GpuBvh8>) -> Vec<u8> {
     let mut out = Vec::with_capacity(p.len() + 20);
     out.extend_from_slice(MAGIC);
     push_u32(&mut out, FORMAT);
-    out.extend_from_slice(&hash(&p, 0).to_le_bytes());
+    out.extend_from_slice(&hash64(0, &p).to_le_bytes());
     out.extend_from_slice(&p);
     out
 }
@@ -107,7 +95,7 @@ fn decode(data: &[u8]) -> Option<(GpuBvh, Option<GpuBvh8>)> {
     let mut r: &[u8] = rest;
     let format: Vec<u32> = take(&mut r, 1)?;
     let sum: Vec<u64> = take(&mut r, 1)?;
-    if format[0] != FORMAT || sum[0] != hash(r, 0) {
+    if format[0] != FORMAT || sum[0] != hash64(0, r) {
         return None;
     }
     let h: Vec<u32> = take(&mut r, 13)?;
@@ -180,15 +168,25 @@ pub fn save(file: &Path, bvh: &GpuBvh, wide: Option<&GpuBvh8>) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };
-    let mut trees: Vec<(std::time::SystemTime, PathBuf)> = entries
-        .flatten()
-        .filter(|e| {
-            let name = e.file_name();
-            let name = name.to_string_lossy();
-            name.starts_with("bvh-") && name.ends_with(".bin")
-        })
-        .filter_map(|e| Some((e.metadata().ok()?.modified().ok()?, e.path())))
-        .collect();
+    let now = std::time::SystemTime::now();
+    let mut trees: Vec<(std::time::SystemTime, PathBuf)> = Vec::new();
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        let Some(modified) = e.metadata().ok().and_then(|m| m.modified().ok()) else {
+            continue;
+        };
+        if !name.starts_with("bvh-") {
+            continue;
+        }
+        if name.ends_with(".bin") {
+            trees.push((modified, e.path()));
+        } else if name.contains(".tmp") && now.duration_since(modified).unwrap_or_default() > STALE
+        {
+            // A write that was killed before its rename; one still running is younger.
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
     if trees.len() > KEEP {
         trees.sort();
         for (_, old) in &trees[..trees.len() - KEEP] {
@@ -253,6 +251,16 @@ mod tests {
                 .unwrap();
         }
         std::fs::write(dir.join("vk-pipelines-x.bin"), b"pipelines").unwrap();
+        // A killed write's leftover goes; a write in progress (a fresh file) stays.
+        let killed = dir.join("bvh-0123456789abcdef.tmp99");
+        std::fs::write(&killed, b"torn").unwrap();
+        std::fs::File::options()
+            .write(true)
+            .open(&killed)
+            .unwrap()
+            .set_modified(old)
+            .unwrap();
+        std::fs::write(dir.join("bvh-fedcba9876543210.tmp98"), b"writing").unwrap();
         save(&dir.join("bvh-new.bin"), &GpuBvh::default(), None);
         let mut left: Vec<String> = std::fs::read_dir(&dir)
             .unwrap()
@@ -263,6 +271,7 @@ mod tests {
         let mut expected: Vec<String> =
             (5..KEEP + 4).map(|i| format!("bvh-{i:016x}.bin")).collect();
         expected.push("bvh-new.bin".into());
+        expected.push("bvh-fedcba9876543210.tmp98".into());
         expected.push("vk-pipelines-x.bin".into());
         expected.sort();
         assert_eq!(left, expected);

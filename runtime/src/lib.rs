@@ -26,6 +26,7 @@ mod device;
 mod disk_cache;
 mod error;
 mod float_controls;
+mod hash;
 mod pipeline_cache;
 pub mod print;
 mod spirv_locals;
@@ -48,6 +49,7 @@ pub use device::{
 };
 pub use disk_cache::cache_dir;
 pub use error::{Result, RuntimeError};
+pub use hash::hash64;
 
 /// Which GPU API a [`Device`] drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

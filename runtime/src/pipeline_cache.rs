@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
-use crate::{KernelArtifact, KernelCode, Result};
+use crate::{hash64, KernelArtifact, KernelCode, Result};
 
 /// Which of a hand-written artifact's two codes a backend consumes; only that one goes into
 /// the key, so a change to the other backend's code does not invalidate this backend's
@@ -18,22 +18,6 @@ use crate::{KernelArtifact, KernelCode, Result};
 pub(crate) enum Code {
     Wgsl,
     Spirv,
-}
-
-/// Every dispatch looks its pipeline up by this hash, so it must be cheap for tens of
-/// kilobytes of code: a multiply-xor fold over 8-byte words (SipHash measured tens of
-/// microseconds per dispatch of the path tracer's kernels). Not for adversarial input.
-fn fold(h: u64, bytes: &[u8]) -> u64 {
-    let mut h = h ^ bytes.len() as u64;
-    let mut chunks = bytes.chunks_exact(8);
-    for c in &mut chunks {
-        let w = u64::from_le_bytes(c.try_into().unwrap());
-        h = (h ^ w).wrapping_mul(0x9e37_79b9_7f4a_7c15).rotate_left(29);
-    }
-    for &b in chunks.remainder() {
-        h = (h ^ b as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
-    h
 }
 
 fn code_hash(kernel: &KernelArtifact, code: Code) -> u64 {
@@ -45,13 +29,13 @@ fn code_hash(kernel: &KernelArtifact, code: Code) -> u64 {
                 wgsl, entry_point, ..
             },
             Code::Wgsl,
-        ) => (1u8, fold(1, wgsl.as_bytes()), entry_point).hash(&mut rest),
+        ) => (1u8, hash64(1, wgsl.as_bytes()), entry_point).hash(&mut rest),
         (
             KernelCode::Shaders {
                 spirv, entry_point, ..
             },
             Code::Spirv,
-        ) => (2u8, fold(2, bytemuck::cast_slice(spirv)), entry_point).hash(&mut rest),
+        ) => (2u8, hash64(2, bytemuck::cast_slice(spirv)), entry_point).hash(&mut rest),
     }
     kernel.bindings.hash(&mut rest);
     kernel.features.hash(&mut rest);
