@@ -176,13 +176,29 @@ impl Device {
 
     /// [`best`](Self::best), and when it chose the CPU backend, why (for a note to the user).
     pub fn best_explained() -> Result<(Device, Option<String>)> {
-        let why = match Device::best_gpu() {
-            Ok(d) if !d.info().software_driver => return Ok((d, None)),
-            Ok(d) => format!(
-                "the only GPU device is {}, a software driver, slower on the same cores",
-                d.info().adapter_name
-            ),
-            Err(e) => format!("no GPU device ({e})"),
+        let software = |name: &str| {
+            format!("the only GPU device is {name}, a software driver, slower on the same cores")
+        };
+        // Where Vulkan's best device is the software driver, its instance tells so, and the
+        // CPU backend is taken without creating that device (creating it cost such a
+        // render 0.01-0.02 s of its startup on idle cores, more on busy ones: BENCHMARKS.md,
+        // "the CPU backend's startup").
+        let why = match vulkan_backend::VkDevice::new_unless_software() {
+            Ok(Ok(vk)) => {
+                return Ok((
+                    Device {
+                        backend: Arc::new(vk),
+                    },
+                    None,
+                ))
+            }
+            Ok(Err(name)) => software(&name),
+            // No Vulkan device: wgpu's, as `best_gpu` tries them.
+            Err(_) => match Device::best_gpu() {
+                Ok(d) if !d.info().software_driver => return Ok((d, None)),
+                Ok(d) => software(&d.info().adapter_name),
+                Err(e) => format!("no GPU device ({e})"),
+            },
         };
         Ok((Device::new(BackendKind::Cpu)?, Some(why)))
     }

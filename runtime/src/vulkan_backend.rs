@@ -160,9 +160,22 @@ impl Drop for VkDevice {
 }
 
 impl VkDevice {
+    /// The best device, or, where that is Mesa's software driver, its name (and no device
+    /// created: `vulkan_init::open_unless_software`).
+    pub(crate) fn new_unless_software() -> Result<std::result::Result<Self, String>> {
+        match vulkan_init::open_unless_software()? {
+            vulkan_init::Found::Opened(opened) => Self::from_opened(*opened).map(Ok),
+            vulkan_init::Found::Software(name) => Ok(Err(name)),
+        }
+    }
+
     /// The best device, or the usable device number `which` (`vulkan_init::open`).
     pub(crate) fn new(which: Option<usize>) -> Result<Self> {
-        let Opened { shared, desc } = vulkan_init::open(which)?;
+        Self::from_opened(vulkan_init::open(which)?)
+    }
+
+    fn from_opened(opened: Opened) -> Result<Self> {
+        let Opened { shared, desc } = opened;
         // From here, dropping `shared` on an error path destroys the device and instance.
         let shared = Arc::new(shared);
         let submitter = Submitter::new(&shared.device, desc.queue_family)?;

@@ -232,10 +232,9 @@ pub(crate) struct Description {
     pub(crate) timestamp_period_ns: f64,
 }
 
-/// Loads Vulkan, creates the instance (with validation where wanted), picks a physical
-/// device (the best, or the usable one numbered `which`) and creates the logical device
-/// with its allocator.
-pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
+/// The Vulkan loader, and the instance version to ask for (1.1 at least: subgroup
+/// operations).
+fn load() -> Result<(ash::Entry, u32)> {
     let entry = unsafe { ash::Entry::load() }
         .map_err(|e| no_adapter(format!("could not load libvulkan.so.1 ({e})")))?;
     let loader_api = unsafe { entry.try_enumerate_instance_version() }
@@ -247,7 +246,46 @@ pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
             version_string(loader_api)
         )));
     }
-    let instance_api = loader_api.min(vk::API_VERSION_1_3);
+    Ok((entry, loader_api.min(vk::API_VERSION_1_3)))
+}
+
+/// Loads Vulkan, creates the instance (with validation where wanted), picks a physical
+/// device (the best, or the usable one numbered `which`) and creates the logical device
+/// with its allocator.
+pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
+    match open_with(which, false)? {
+        Found::Opened(opened) => Ok(*opened),
+        Found::Software(name) => unreachable!("{name}: no device is skipped here"),
+    }
+}
+
+/// What [`open_unless_software`] found.
+pub(crate) enum Found {
+    Opened(Box<Opened>),
+    /// The best device is Mesa's software driver (named): no device was created.
+    Software(String),
+}
+
+/// [`open`]`(None)`, except that when the best device is Mesa's software driver, the
+/// instance alone tells so and no device is created (`Device::best` then takes the CPU
+/// backend, which is faster on the same cores).
+pub(crate) fn open_unless_software() -> Result<Found> {
+    open_with(None, true)
+}
+
+/// Whether candidate `c` is Mesa's software driver: by the driver's id, which Vulkan 1.2
+/// reports (the rule `DeviceInfo::software_driver` follows).
+fn is_software(instance: &ash::Instance, c: &Candidate) -> bool {
+    c.api >= vk::API_VERSION_1_2 && {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(c.physical, &mut props2) };
+        driver.driver_id == vk::DriverId::MESA_LLVMPIPE
+    }
+}
+
+fn open_with(which: Option<usize>, skip_software: bool) -> Result<Found> {
+    let (entry, instance_api) = load()?;
 
     let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
     let has_layer = layers
@@ -312,9 +350,25 @@ pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
     });
     let debug = debug.flatten();
 
+    let destroy = |debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+        if let Some((loader, m)) = debug {
+            loader.destroy_debug_utils_messenger(m, None);
+        }
+        instance.destroy_instance(None);
+    };
+    if skip_software {
+        let software = pick_physical_device(&instance, instance_api, None)
+            .ok()
+            .filter(|c| is_software(&instance, c))
+            .map(|c| device_name(&c.props));
+        if let Some(name) = software {
+            destroy(debug);
+            return Ok(Found::Software(name));
+        }
+    }
     // From here on, failures must destroy the instance; `open_device` does the rest.
     match open_device(&instance, instance_api, which) {
-        Ok((device, allocator, desc)) => Ok(Opened {
+        Ok((device, allocator, desc)) => Ok(Found::Opened(Box::new(Opened {
             shared: Shared {
                 _entry: entry,
                 instance,
@@ -324,17 +378,19 @@ pub(crate) fn open(which: Option<usize>) -> Result<Opened> {
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
             },
             desc,
-        }),
+        }))),
         Err(e) => {
-            unsafe {
-                if let Some((loader, m)) = debug {
-                    loader.destroy_debug_utils_messenger(m, None);
-                }
-                instance.destroy_instance(None);
-            }
+            destroy(debug);
             Err(e)
         }
     }
+}
+
+fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
+    props
+        .device_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 /// Picks the physical device, creates the logical device and queries everything
@@ -459,10 +515,7 @@ fn open_device(
 
     let p = &c.props;
     let l = &p.limits;
-    let name = p
-        .device_name_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = device_name(p);
     let driver_text = if is_12 {
         let dn = driver
             .driver_name_as_c_str()

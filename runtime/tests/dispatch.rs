@@ -506,7 +506,9 @@ fn best_prefers_vulkan_then_a_real_gpu_over_the_software_driver() {
         Device::best_gpu().unwrap().info().backend,
         BackendKind::Vulkan
     );
-    let best = Device::best().unwrap();
+    // `best` tells the software driver without opening it (`VkDevice::peek_best`): its
+    // choice must be the one the opened device gives, and its note must name that device.
+    let (best, why) = Device::best_explained().unwrap();
     let vk = Device::new(BackendKind::Vulkan).unwrap();
     let expected = if vk.info().software_driver {
         BackendKind::Cpu
@@ -514,4 +516,8 @@ fn best_prefers_vulkan_then_a_real_gpu_over_the_software_driver() {
         BackendKind::Vulkan
     };
     assert_eq!(best.info().backend, expected, "{:?}", best.info());
+    match why {
+        Some(why) => assert!(why.contains(&vk.info().adapter_name), "{why}"),
+        None => assert_eq!(expected, BackendKind::Vulkan),
+    }
 }
