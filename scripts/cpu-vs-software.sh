@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The CPU backend against the software Vulkan driver on the same cores (issue 10): the
+# The CPU backend against the software Vulkan driver on the same cores: the
 # README's first command on each, alternated $ROUNDS times (default 3), paths/s per run.
 # Usage: scripts/cpu-vs-software.sh [extra render options]. Builds the release binary
 # first unless $BIN names one.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# GPU run for next-event estimation and the never-waiting loop (issue 8): GPU suites that
+# GPU run for next-event estimation and the never-waiting loop: GPU suites that
 # cover light sampling, kernel_bench (traversal after the semantics changes), and renders
 # of the shared scenes with both integrators, logging nvidia-smi clocks beside them.
 # Expects bin-gpu/ (release binaries) and shared-scenes/ (a copy of ../shared/scenes).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Ray reordering end to end (issue 11 item 4; BENCHMARKS.md, session 17) on a GPU machine,
+# Ray reordering end to end (BENCHMARKS.md) on a GPU machine,
 # through the device tool, from the repository root: `cohort render --reorder K` for K = 0
 # (off), 1 (every iteration) and 4, with the paper's configurations normal, warp, block_256
 # and grid, on the four paper scenes, then K = 0 and 1 on the shared scenes. paths/s per

@@ -27,7 +27,7 @@ echo "== compile times"; $B/compile_times 25 | tee "$OUT/compile_times.md" | tai
 for be in vulkan wgpu; do
   echo "== kernel bench $be"; $B/kernel_bench confroom $be 2>&1 | tee "$OUT/kernel_bench_$be.txt"
 done
-# Coherent configurations against normal, same run (issue 4), one scene per run.
+# Coherent configurations against normal, same run, one scene per run.
 for s in ${COHERENT_SCENES:-confroom}; do
   for cfg in "normal --compact" "warp --compact" "block_256 --compact" "block_512 --compact" "block_1024 --compact" "grid --compact" "warp --rr group " "block_256 --rr group" "warp --in-patch equal-area --compact" "normal" \
       "warp --rr whole --compact" "warp --rr whole " "block_256 --rr whole"; do
