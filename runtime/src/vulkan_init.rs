@@ -356,18 +356,20 @@ fn open_with(which: Option<usize>, skip_software: bool) -> Result<Found> {
         }
         instance.destroy_instance(None);
     };
-    if skip_software {
-        let software = pick_physical_device(&instance, instance_api, None)
-            .ok()
-            .filter(|c| is_software(&instance, c))
-            .map(|c| device_name(&c.props));
-        if let Some(name) = software {
-            destroy(debug);
-            return Ok(Found::Software(name));
-        }
-    }
     // From here on, failures must destroy the instance; `open_device` does the rest.
-    match open_device(&instance, instance_api, which) {
+    let c = match pick_physical_device(&instance, instance_api, which) {
+        Ok(c) => c,
+        Err(e) => {
+            destroy(debug);
+            return Err(e);
+        }
+    };
+    let software = is_software(&instance, &c);
+    if skip_software && software {
+        destroy(debug);
+        return Ok(Found::Software(device_name(&c.props)));
+    }
+    match open_device(&instance, c, software) {
         Ok((device, allocator, desc)) => Ok(Found::Opened(Box::new(Opened {
             shared: Shared {
                 _entry: entry,
@@ -393,14 +395,13 @@ fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
         .unwrap_or_default()
 }
 
-/// Picks the physical device, creates the logical device and queries everything
-/// `DeviceInfo` reports.
+/// Creates the logical device of candidate `c` (the software driver where `software`) and
+/// queries everything `DeviceInfo` reports.
 fn open_device(
     instance: &ash::Instance,
-    instance_api: u32,
-    which: Option<usize>,
+    c: Candidate,
+    software: bool,
 ) -> Result<(ash::Device, Allocator, Description)> {
-    let c = pick_physical_device(instance, instance_api, which)?;
     let api = c.api;
     let pd = c.physical;
 
@@ -549,7 +550,6 @@ fn open_device(
         .supported_stages
         .contains(vk::ShaderStageFlags::COMPUTE);
     let timestamps = c.timestamp_valid_bits > 0 && l.timestamp_period > 0.0;
-    let software = driver.driver_id == vk::DriverId::MESA_LLVMPIPE;
     let info = DeviceInfo {
         backend: BACKEND,
         adapter_name: name,
