@@ -16,7 +16,7 @@ use crate::backend::{
 use crate::buffer::RawBuffer;
 use crate::cpu::{self, HostBuf, HostKernel};
 use crate::device::{DeviceInfo, Dispatch, DispatchStats, Limits};
-use crate::{BackendKind, BufferArg, KernelArtifact, Result, RuntimeError};
+use crate::{BackendKind, BufferArg, KernelArtifact, KernelCode, Result, RuntimeError};
 
 /// Host memory of one buffer, 16-byte aligned and zero-filled.
 pub(crate) struct CpuBuffer {
@@ -61,16 +61,25 @@ impl CpuBuffer {
 /// One recorded dispatch.
 pub(crate) struct Cmd {
     name: String,
-    host: HostKernel,
+    /// How the dispatch runs: the kernel's vector form where it has one, else its host form.
+    form: Form,
     workgroup_size: u32,
     /// The kept buffers (alive until the dispatch ran) and their logical sizes.
     args: Vec<Arg<Arc<CpuBuffer>>>,
     groups: Groups<Arc<CpuBuffer>>,
 }
 
+#[derive(Clone, Copy)]
+enum Form {
+    Simd(cpu::simd::SimdKernel),
+    Host(HostKernel),
+}
+
 pub(crate) struct CpuDevice {
     pub(crate) info: DeviceInfo,
     pub(crate) limits: Limits,
+    /// Whether kernels run their vector form where they have one.
+    simd: bool,
 }
 
 thread_local! {
@@ -78,7 +87,8 @@ thread_local! {
 }
 
 impl CpuDevice {
-    pub(crate) fn new(which: Option<usize>) -> Result<CpuDevice> {
+    /// The CPU device; `simd`: run kernels' vector forms where they have one.
+    pub(crate) fn new(which: Option<usize>, simd: bool) -> Result<CpuDevice> {
         if let Some(index) = which.filter(|&i| i > 0) {
             return Err(RuntimeError::NoSuchDevice {
                 backend: BackendKind::Cpu,
@@ -90,7 +100,16 @@ impl CpuDevice {
             info: DeviceInfo {
                 backend: BackendKind::Cpu,
                 adapter_name: cpu_name(),
-                driver: format!("cohort native, {} threads", rayon::current_num_threads()),
+                driver: format!(
+                    "cohort native, {} threads, {}",
+                    rayon::current_num_threads(),
+                    match (simd, cpu::simd::llvm_library()) {
+                        (true, Ok(lib)) =>
+                            format!("{}-lane vector forms ({lib})", cpu::simd::LANES),
+                        (true, Err(_)) => "host forms (no libLLVM found)".to_string(),
+                        (false, _) => "host forms".to_string(),
+                    }
+                ),
                 software_driver: false,
                 subgroup_size_min: cpu::SUBGROUP_WIDTH,
                 subgroup_size_max: cpu::SUBGROUP_WIDTH,
@@ -115,7 +134,16 @@ impl CpuDevice {
                 // move it to (the CPU itself would take far more).
                 max_workgroup_memory: 48 * 1024,
             },
+            simd,
         })
+    }
+
+    /// The vector form of a compiled kernel, when it has one and this device runs them.
+    fn simd_form(&self, kernel: &KernelArtifact) -> Option<cpu::simd::SimdKernel> {
+        match &kernel.code {
+            KernelCode::Compiled(k) if self.simd => cpu::simd::compile(k).ok(),
+            _ => None,
+        }
     }
 
     fn own(&self, raw: &RawBuffer, op: &'static str) -> Result<Arc<CpuBuffer>> {
@@ -185,6 +213,10 @@ fn run(cmd: &Cmd) -> Result<()> {
     if total == 0 {
         return Ok(());
     }
+    let host = match cmd.form {
+        Form::Simd(k) => return run_simd(cmd, k, groups, total as u32),
+        Form::Host(h) => h,
+    };
     let bufs: Vec<HostBuf> = cmd
         .args
         .iter()
@@ -193,7 +225,7 @@ fn run(cmd: &Cmd) -> Result<()> {
             bytes: arg.size_bytes as usize,
         })
         .collect();
-    let launch = cpu::Launch::new(&cmd.host, &bufs, cmd.workgroup_size, groups);
+    let launch = cpu::Launch::new(&host, &bufs, cmd.workgroup_size, groups);
     let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
         (0..total as u32)
             .into_par_iter()
@@ -211,6 +243,37 @@ fn run(cmd: &Cmd) -> Result<()> {
             detail: format!("an invocation panicked: {message}"),
         }
     })
+}
+
+/// A dispatch of a kernel's vector form: workgroups spread over the cores as for host
+/// forms, each run as blocks of `LANES` invocations.
+fn run_simd(cmd: &Cmd, k: cpu::simd::SimdKernel, groups: [u32; 3], total: u32) -> Result<()> {
+    let env: Vec<cpu::simd::EnvEntry> = cmd
+        .args
+        .iter()
+        .map(|arg| cpu::simd::EnvEntry {
+            ptr: arg.buffer.ptr(),
+            bytes: arg.size_bytes,
+        })
+        .collect();
+    struct Env(Vec<cpu::simd::EnvEntry>);
+    // The entries point at buffers the dispatch's invocations share, as on a GPU.
+    unsafe impl Sync for Env {}
+    let env = Env(env);
+    let env = &env;
+    let ok = (0..total).into_par_iter().all(|wg| {
+        // SAFETY: the entries are the dispatch's bindings in binding order, at their sizes.
+        unsafe { k.run(&env.0, wg, wg + 1, groups) }
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(RuntimeError::Dispatch {
+            kernel: cmd.name.clone(),
+            backend: BackendKind::Cpu,
+            detail: "index out of bounds: an invocation read or wrote past the end of a buffer or local array".into(),
+        })
+    }
 }
 
 impl Backend for CpuDevice {
@@ -242,8 +305,9 @@ impl Backend for CpuDevice {
         Ok(())
     }
 
-    /// Nothing to build: the kernel's host function is part of the program.
-    fn prepare(&self, _kernel: &KernelArtifact) -> Result<()> {
+    /// Compiles the kernel's vector form (the host form is part of the program).
+    fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
+        self.simd_form(kernel);
         Ok(())
     }
 
@@ -267,16 +331,21 @@ impl Records for CpuDevice {
         args: &[BufferArg<'_>],
         dispatch: &Dispatch<'_>,
     ) -> Result<Cmd> {
-        let host = kernel.host.ok_or_else(|| RuntimeError::MissingFeature {
-            kernel: kernel.name.clone(),
-            backend: BackendKind::Cpu,
-            feature: "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
-        })?;
+        let form = match (self.simd_form(kernel), kernel.host) {
+            (Some(k), _) => Form::Simd(k),
+            (None, Some(h)) => Form::Host(h),
+            (None, None) => return Err(RuntimeError::MissingFeature {
+                kernel: kernel.name.clone(),
+                backend: BackendKind::Cpu,
+                feature:
+                    "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
+            }),
+        };
         // Host memory is one: a buffer of any CPU device binds on every CPU device.
         let (args, groups) = resolve(kernel, args, dispatch, |raw| raw.get::<CpuBuffer>())?;
         Ok(Cmd {
             name: kernel.name.clone(),
-            host,
+            form,
             workgroup_size: kernel.workgroup_size[0],
             args,
             groups,

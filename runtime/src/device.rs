@@ -162,9 +162,20 @@ impl Device {
         let backend: Arc<dyn Backend> = match kind {
             BackendKind::Wgpu => Arc::new(wgpu_backend::WgpuDevice::new(which)?),
             BackendKind::Vulkan => Arc::new(vulkan_backend::VkDevice::new(which)?),
-            BackendKind::Cpu => Arc::new(cpu_backend::CpuDevice::new(which)?),
+            BackendKind::Cpu => Arc::new(cpu_backend::CpuDevice::new(
+                which,
+                crate::cpu::simd::enabled(),
+            )?),
         };
         Ok(Device { backend })
+    }
+
+    /// The CPU backend running every kernel's host form (its own Rust function), never its
+    /// vector form: the reference the vector form is compared with.
+    pub fn cpu_host_forms() -> Result<Device> {
+        Ok(Device {
+            backend: Arc::new(cpu_backend::CpuDevice::new(None, false)?),
+        })
     }
 
     /// A real GPU if there is one: raw Vulkan first (required subgroup sizes, no WGSL

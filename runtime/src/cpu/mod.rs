@@ -16,6 +16,7 @@
 
 mod lanes;
 mod share;
+pub mod simd;
 
 pub use lanes::{exchange, group_value, lane, Lane, Lanes, Scope, View};
 pub(crate) use lanes::{run_workgroup, Launch, Scratch};
