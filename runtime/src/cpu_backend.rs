@@ -61,25 +61,20 @@ impl CpuBuffer {
 /// One recorded dispatch.
 pub(crate) struct Cmd {
     name: String,
-    /// How the dispatch runs: the kernel's vector form where it has one, else its host form.
-    form: Form,
+    /// The kernel's vector form, where it has one and the device runs them.
+    simd: Option<cpu::simd::SimdKernel>,
+    host: Option<HostKernel>,
     workgroup_size: u32,
     /// The kept buffers (alive until the dispatch ran) and their logical sizes.
     args: Vec<Arg<Arc<CpuBuffer>>>,
     groups: Groups<Arc<CpuBuffer>>,
 }
 
-#[derive(Clone, Copy)]
-enum Form {
-    Simd(cpu::simd::SimdKernel),
-    Host(HostKernel),
-}
-
 pub(crate) struct CpuDevice {
     pub(crate) info: DeviceInfo,
     pub(crate) limits: Limits,
-    /// Whether kernels run their vector form where they have one.
-    simd: bool,
+    forms: cpu::simd::Forms,
+    chooser: cpu::simd::Chooser,
 }
 
 thread_local! {
@@ -87,8 +82,9 @@ thread_local! {
 }
 
 impl CpuDevice {
-    /// The CPU device; `simd`: run kernels' vector forms where they have one.
-    pub(crate) fn new(which: Option<usize>, simd: bool) -> Result<CpuDevice> {
+    /// The CPU device, running kernels in `forms`.
+    pub(crate) fn new(which: Option<usize>, forms: cpu::simd::Forms) -> Result<CpuDevice> {
+        use cpu::simd::Forms;
         if let Some(index) = which.filter(|&i| i > 0) {
             return Err(RuntimeError::NoSuchDevice {
                 backend: BackendKind::Cpu,
@@ -103,11 +99,15 @@ impl CpuDevice {
                 driver: format!(
                     "cohort native, {} threads, {}",
                     rayon::current_num_threads(),
-                    match (simd, cpu::simd::llvm_library()) {
-                        (true, Ok(lib)) =>
+                    match (forms, cpu::simd::llvm_library()) {
+                        (Forms::Host, _) => "host forms".to_string(),
+                        (_, Err(_)) => "host forms (no libLLVM found)".to_string(),
+                        (Forms::Vector, Ok(lib)) =>
                             format!("{}-lane vector forms ({lib})", cpu::simd::LANES),
-                        (true, Err(_)) => "host forms (no libLLVM found)".to_string(),
-                        (false, _) => "host forms".to_string(),
+                        (Forms::Measured, Ok(lib)) => format!(
+                            "the faster of host and {}-lane vector forms ({lib})",
+                            cpu::simd::LANES
+                        ),
                     }
                 ),
                 software_driver: false,
@@ -134,14 +134,20 @@ impl CpuDevice {
                 // move it to (the CPU itself would take far more).
                 max_workgroup_memory: 48 * 1024,
             },
-            simd,
+            forms,
+            chooser: Default::default(),
         })
     }
 
     /// The vector form of a compiled kernel, when it has one and this device runs them.
+    /// While it is being compiled, a kernel with a host form runs that (measured mode)
+    /// and others wait for it.
     fn simd_form(&self, kernel: &KernelArtifact) -> Option<cpu::simd::SimdKernel> {
         match &kernel.code {
-            KernelCode::Compiled(k) if self.simd => cpu::simd::compile(k).ok(),
+            KernelCode::Compiled(k) if self.forms != cpu::simd::Forms::Host => {
+                let wait = self.forms == cpu::simd::Forms::Vector || kernel.host.is_none();
+                cpu::simd::compiled(k, wait)
+            }
             _ => None,
         }
     }
@@ -160,7 +166,7 @@ impl CpuDevice {
         let mut stats = Vec::with_capacity(cmds.len());
         for cmd in &cmds {
             let start = Instant::now();
-            run(cmd)?;
+            self.run(cmd)?;
             stats.push(DispatchStats {
                 gpu_time_ns: Some(start.elapsed().as_nanos() as u64),
             });
@@ -197,26 +203,50 @@ fn cpu_name() -> String {
     format!("CPU: {model}")
 }
 
-fn run(cmd: &Cmd) -> Result<()> {
-    let groups = match &cmd.groups {
-        Groups::Direct(g) => *g,
-        Groups::Indirect(b, at) => {
-            let mut words = [0u8; 12];
-            let start = *at as usize;
-            // SAFETY: `check_call` checked that three words follow `at`.
-            unsafe { std::ptr::copy_nonoverlapping(b.ptr().add(start), words.as_mut_ptr(), 12) };
-            let w = |i: usize| u32::from_le_bytes(words[i * 4..i * 4 + 4].try_into().unwrap());
-            [w(0), w(1), w(2)]
+impl CpuDevice {
+    /// Runs one dispatch in the kernel's vector form or its host form (`choice`).
+    fn run(&self, cmd: &Cmd) -> Result<()> {
+        let groups = match &cmd.groups {
+            Groups::Direct(g) => *g,
+            Groups::Indirect(b, at) => {
+                let mut words = [0u8; 12];
+                let start = *at as usize;
+                // SAFETY: `check_call` checked that three words follow `at`.
+                unsafe {
+                    std::ptr::copy_nonoverlapping(b.ptr().add(start), words.as_mut_ptr(), 12)
+                };
+                let w = |i: usize| u32::from_le_bytes(words[i * 4..i * 4 + 4].try_into().unwrap());
+                [w(0), w(1), w(2)]
+            }
+        };
+        let total = groups.iter().map(|&g| g as u64).product::<u64>();
+        if total == 0 {
+            return Ok(());
         }
-    };
-    let total = groups.iter().map(|&g| g as u64).product::<u64>();
-    if total == 0 {
-        return Ok(());
+        let vector = match (cmd.simd, cmd.host) {
+            (Some(_), None) => true,
+            (Some(_), Some(_)) => {
+                self.forms == cpu::simd::Forms::Vector || self.chooser.vector_next(&cmd.name)
+            }
+            _ => false,
+        };
+        let start = Instant::now();
+        let ran = match (vector, cmd.simd, cmd.host) {
+            (true, Some(k), _) => run_simd(cmd, k, groups, total as u32),
+            (_, _, Some(h)) => run_host(cmd, h, groups, total),
+            _ => unreachable!("record_cmd keeps a command only with a form to run"),
+        };
+        if cmd.simd.is_some() && cmd.host.is_some() && ran.is_ok() {
+            let invocations = total * u64::from(cmd.workgroup_size);
+            let ns = start.elapsed().as_nanos() as u64;
+            self.chooser.record(&cmd.name, vector, ns, invocations);
+        }
+        ran
     }
-    let host = match cmd.form {
-        Form::Simd(k) => return run_simd(cmd, k, groups, total as u32),
-        Form::Host(h) => h,
-    };
+}
+
+/// A dispatch of a kernel's host form.
+fn run_host(cmd: &Cmd, host: HostKernel, groups: [u32; 3], total: u64) -> Result<()> {
     let bufs: Vec<HostBuf> = cmd
         .args
         .iter()
@@ -305,7 +335,7 @@ impl Backend for CpuDevice {
         Ok(())
     }
 
-    /// Compiles the kernel's vector form (the host form is part of the program).
+    /// Starts compiling the kernel's vector form (the host form is part of the program).
     fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
         self.simd_form(kernel);
         Ok(())
@@ -331,21 +361,21 @@ impl Records for CpuDevice {
         args: &[BufferArg<'_>],
         dispatch: &Dispatch<'_>,
     ) -> Result<Cmd> {
-        let form = match (self.simd_form(kernel), kernel.host) {
-            (Some(k), _) => Form::Simd(k),
-            (None, Some(h)) => Form::Host(h),
-            (None, None) => return Err(RuntimeError::MissingFeature {
+        let simd = self.simd_form(kernel);
+        if simd.is_none() && kernel.host.is_none() {
+            return Err(RuntimeError::MissingFeature {
                 kernel: kernel.name.clone(),
                 backend: BackendKind::Cpu,
                 feature:
                     "a host form (kernels built from WGSL or SPIR-V alone cannot run on the CPU)",
-            }),
-        };
+            });
+        }
         // Host memory is one: a buffer of any CPU device binds on every CPU device.
         let (args, groups) = resolve(kernel, args, dispatch, |raw| raw.get::<CpuBuffer>())?;
         Ok(Cmd {
             name: kernel.name.clone(),
-            form,
+            simd,
+            host: kernel.host,
             workgroup_size: kernel.workgroup_size[0],
             args,
             groups,

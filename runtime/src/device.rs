@@ -164,17 +164,17 @@ impl Device {
             BackendKind::Vulkan => Arc::new(vulkan_backend::VkDevice::new(which)?),
             BackendKind::Cpu => Arc::new(cpu_backend::CpuDevice::new(
                 which,
-                crate::cpu::simd::enabled(),
+                crate::cpu::simd::Forms::from_env(),
             )?),
         };
         Ok(Device { backend })
     }
 
-    /// The CPU backend running every kernel's host form (its own Rust function), never its
-    /// vector form: the reference the vector form is compared with.
-    pub fn cpu_host_forms() -> Result<Device> {
+    /// The CPU backend with kernels in the given forms, whatever `COHORT_CPU_SIMD` says
+    /// (`Forms::Host` is the reference the vector forms are compared with).
+    pub fn cpu_with(forms: crate::cpu::simd::Forms) -> Result<Device> {
         Ok(Device {
-            backend: Arc::new(cpu_backend::CpuDevice::new(None, false)?),
+            backend: Arc::new(cpu_backend::CpuDevice::new(None, forms)?),
         })
     }
 

@@ -265,3 +265,28 @@ fn emission_is_deterministic() {
         assert_eq!(a.spirv, b.spirv, "{}", v.name);
     }
 }
+
+/// The CPU backend's vector form covers every renderer kernel except those that wait for
+/// each other or share workgroup memory (which keep their host forms): a construct the
+/// lowering does not know would silently cost the renderer its vector speed.
+#[test]
+fn renderer_kernels_have_a_vector_form() {
+    let excluded = ["barriers or subgroup operations", "workgroup memory"];
+    let mut lowered = 0;
+    for v in renderer_variants() {
+        let built = (v.build)(&v.spec);
+        let compiled = cohort::compiler::compile(&built, v.name.clone()).unwrap();
+        match cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+            Ok(ir) => {
+                assert!(ir.contains("define void @cohort_run("), "{}", v.name);
+                lowered += 1;
+            }
+            Err(e) => assert!(
+                excluded.contains(&e.as_str()),
+                "{}: no vector form: {e}",
+                v.name
+            ),
+        }
+    }
+    assert!(lowered >= 8, "only {lowered} renderer kernels lowered");
+}

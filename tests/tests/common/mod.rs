@@ -7,11 +7,23 @@ use cohort::runtime::{BackendKind, Device};
 /// Every backend with an adapter here (wgpu and Vulkan on lavapipe or a GPU), and the
 /// native CPU backend. With `CI=true` a missing adapter fails the test instead of
 /// skipping it.
+///
+/// The CPU backend comes twice: with every kernel's host form, and with its vector form
+/// wherever it has one (`cpu::simd`), so that each suite checks both against the host run.
 pub fn devices() -> Vec<Device> {
-    [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu]
+    use cohort::runtime::cpu::simd::Forms;
+    let mut out: Vec<Device> = [BackendKind::Wgpu, BackendKind::Vulkan]
         .into_iter()
         .filter_map(Device::for_tests)
-        .collect()
+        .collect();
+    if std::env::var("CI").as_deref() == Ok("true") {
+        if let Err(e) = cohort::runtime::cpu::simd::llvm_library() {
+            panic!("CI=true and the CPU backend's vector form cannot compile: {e}");
+        }
+    }
+    out.push(Device::cpu_with(Forms::Host).expect("the CPU backend always opens"));
+    out.push(Device::cpu_with(Forms::Vector).expect("the CPU backend always opens"));
+    out
 }
 
 /// Whether `d` is the native CPU backend, which runs the kernel's own Rust function: its

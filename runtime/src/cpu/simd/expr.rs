@@ -538,6 +538,17 @@ impl Fx<'_> {
         arg1: Option<Handle<naga::Expression>>,
         arg2: Option<Handle<naga::Expression>>,
     ) -> Lowering<Val> {
+        if let (
+            Mf::Transpose,
+            &TypeInner::Matrix {
+                columns,
+                rows,
+                scalar: s,
+            },
+        ) = (fun, self.ty_of(arg))
+        {
+            return self.transpose(arg, columns as u32, rows as u32, s);
+        }
         let (n, s) = shape(self.ty_of(arg))?;
         let st = scalar(s)?;
         let v = lanes(st);
@@ -729,6 +740,27 @@ impl Fx<'_> {
             }
             other => Err(format!("the math function {other:?} on {s:?}")),
         }
+    }
+
+    /// The transpose of a `columns x rows` matrix value: element `[c][r]` moves to `[r][c]`.
+    fn transpose(
+        &mut self,
+        arg: Handle<naga::Expression>,
+        columns: u32,
+        rows: u32,
+        s: Scalar,
+    ) -> Lowering<Val> {
+        let m = self.val(arg)?;
+        let v = lanes(scalar(s)?);
+        let ty = format!("[{rows} x [{columns} x {v}]]");
+        let mut acc = "poison".to_string();
+        for c in 0..columns {
+            for r in 0..rows {
+                let e = self.op(&format!("extractvalue {}, {c}, {r}", m.typed()?));
+                acc = self.op(&format!("insertvalue {ty} {acc}, {v} {e}, {r}, {c}"));
+            }
+        }
+        Ok(Val::r(ty, acc))
     }
 
     /// `m * v` as glam computes it: `((m.x * v.x) + (m.y * v.y)) + ...`, column by column.

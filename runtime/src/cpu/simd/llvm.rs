@@ -1,7 +1,9 @@
 //! LLVM, found at run time: the vector form's IR text is parsed, optimised at `-O2` for this
-//! CPU and compiled by an ORC `LLJIT` through libLLVM's C API, loaded with `dlopen` as
-//! Dr.Jit loads it. Nothing links against LLVM: without a libLLVM the CPU backend runs
-//! host forms. `COHORT_LIBLLVM` names the library; otherwise the newest of the usual
+//! CPU and compiled to an object file through libLLVM's C API, loaded with `dlopen` as
+//! Dr.Jit loads it; an ORC `LLJIT` links the object into the process. Object files are
+//! kept in Cohort's cache folder, keyed by the IR, the library and the CPU, so a later
+//! run skips LLVM's work. Nothing links against LLVM: without a libLLVM the CPU backend
+//! runs host forms. `COHORT_LIBLLVM` names the library; otherwise the newest of the usual
 //! sonames is taken (Mesa's software Vulkan driver already brings one).
 
 use std::ffi::{c_char, c_void, CStr, CString};
@@ -18,10 +20,14 @@ struct Api {
     dispose_message: unsafe extern "C" fn(*mut c_char),
     membuf: unsafe extern "C" fn(*const c_char, usize, *const c_char, i32) -> P,
     parse: unsafe extern "C" fn(P, P, *mut P, *mut *mut c_char) -> i32,
-    tsc_new: unsafe extern "C" fn() -> P,
-    tsc_context: unsafe extern "C" fn(P) -> P,
-    tsm_new: unsafe extern "C" fn(P, P) -> P,
-    jit_add: unsafe extern "C" fn(P, P, P) -> P,
+    context_new: unsafe extern "C" fn() -> P,
+    context_dispose: unsafe extern "C" fn(P),
+    module_dispose: unsafe extern "C" fn(P),
+    emit: unsafe extern "C" fn(P, P, i32, *mut *mut c_char, *mut P) -> i32,
+    buffer_start: unsafe extern "C" fn(P) -> *const u8,
+    buffer_size: unsafe extern "C" fn(P) -> usize,
+    buffer_dispose: unsafe extern "C" fn(P),
+    jit_add_object: unsafe extern "C" fn(P, P, P) -> P,
     jit_lookup: unsafe extern "C" fn(P, *mut u64, *const c_char) -> P,
     jit_dylib: unsafe extern "C" fn(P) -> P,
     error_message: unsafe extern "C" fn(P) -> *mut c_char,
@@ -39,7 +45,10 @@ struct Api {
 pub struct Jit {
     api: Api,
     jit: P,
-    next: u64,
+    /// What the objects depend on besides the IR: the library and the host CPU.
+    target_key: u64,
+    /// Entry addresses of the kernels linked so far, by key.
+    linked: std::collections::HashMap<u64, usize>,
 }
 // The JIT is used under a mutex only.
 unsafe impl Send for Jit {}
@@ -101,6 +110,13 @@ impl Jit {
             let cpu = sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetHostCPUName")?();
             let features =
                 sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetHostCPUFeatures")?();
+            let target_key = crate::hash64(
+                crate::hash64(
+                    crate::hash64(0, name.as_bytes()),
+                    CStr::from_ptr(cpu).to_bytes(),
+                ),
+                CStr::from_ptr(features).to_bytes(),
+            );
             let mut target: P = std::ptr::null_mut();
             let mut msg: *mut c_char = std::ptr::null_mut();
             let get_target: unsafe extern "C" fn(*const c_char, *mut P, *mut *mut c_char) -> i32 =
@@ -120,8 +136,9 @@ impl Jit {
                 i32,
                 i32,
             ) -> P = sym(&lib, "LLVMCreateTargetMachine")?;
-            // Level 2 (default), reloc default, code model JIT default.
-            let tm = create_tm(target, triple, cpu, features, 2, 0, 1);
+            // Level 2 (default), position-independent (the JIT links the object anywhere,
+            // calls into libm go through its GOT), code model default.
+            let tm = create_tm(target, triple, cpu, features, 2, 2, 0);
             let layout_of: unsafe extern "C" fn(P) -> P = sym(&lib, "LLVMCreateTargetDataLayout")?;
             let layout_str: unsafe extern "C" fn(P) -> *mut c_char =
                 sym(&lib, "LLVMCopyStringRepOfTargetData")?;
@@ -131,10 +148,14 @@ impl Jit {
                 dispose_message: sym(&lib, "LLVMDisposeMessage")?,
                 membuf: sym(&lib, "LLVMCreateMemoryBufferWithMemoryRangeCopy")?,
                 parse: sym(&lib, "LLVMParseIRInContext")?,
-                tsc_new: sym(&lib, "LLVMOrcCreateNewThreadSafeContext")?,
-                tsc_context: sym(&lib, "LLVMOrcThreadSafeContextGetContext")?,
-                tsm_new: sym(&lib, "LLVMOrcCreateNewThreadSafeModule")?,
-                jit_add: sym(&lib, "LLVMOrcLLJITAddLLVMIRModule")?,
+                context_new: sym(&lib, "LLVMContextCreate")?,
+                context_dispose: sym(&lib, "LLVMContextDispose")?,
+                module_dispose: sym(&lib, "LLVMDisposeModule")?,
+                emit: sym(&lib, "LLVMTargetMachineEmitToMemoryBuffer")?,
+                buffer_start: sym(&lib, "LLVMGetBufferStart")?,
+                buffer_size: sym(&lib, "LLVMGetBufferSize")?,
+                buffer_dispose: sym(&lib, "LLVMDisposeMemoryBuffer")?,
+                jit_add_object: sym(&lib, "LLVMOrcLLJITAddObjectFile")?,
                 jit_lookup: sym(&lib, "LLVMOrcLLJITLookup")?,
                 jit_dylib: sym(&lib, "LLVMOrcLLJITGetMainJITDylib")?,
                 error_message: sym(&lib, "LLVMGetErrorMessage")?,
@@ -169,7 +190,12 @@ impl Jit {
                 std::ptr::null_mut(),
             ))?;
             add_generator((api.jit_dylib)(jit), g);
-            Ok(Jit { api, jit, next: 0 })
+            Ok(Jit {
+                api,
+                jit,
+                target_key,
+                linked: Default::default(),
+            })
         }
     }
 
@@ -178,20 +204,53 @@ impl Jit {
         &self.api.name
     }
 
-    /// A fresh symbol name for the next kernel's entry function.
-    pub fn fresh_symbol(&mut self) -> String {
-        self.next += 1;
-        format!("cohort_run_{}", self.next)
+    /// Compiles the IR of a kernel's vector form, whose entry function is named `entry`
+    /// (or takes its object file from the cache), links it and returns the entry's
+    /// address. The same IR is linked once per process.
+    pub fn compile(&mut self, ir: &str, entry: &str) -> Result<usize, String> {
+        let key = crate::hash64(self.target_key, ir.as_bytes());
+        if let Some(&addr) = self.linked.get(&key) {
+            return Ok(addr);
+        }
+        // One name per IR, so that objects from the cache link under the name they have.
+        let symbol = format!("{entry}_{key:016x}");
+        let ir = ir.replacen(&format!("@{entry}("), &format!("@{symbol}("), 1);
+        let file = crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.o")));
+        let object = match file.as_ref().and_then(|f| std::fs::read(f).ok()) {
+            Some(o) => o,
+            None => {
+                let o = self.object(&ir)?;
+                crate::disk_cache::save(&file, &o);
+                o
+            }
+        };
+        let a = &self.api;
+        // SAFETY: the C API is used as documented; the JIT takes the buffer.
+        let addr = unsafe {
+            let name = c"cohort-kernel";
+            let buf = (a.membuf)(
+                object.as_ptr() as *const c_char,
+                object.len(),
+                name.as_ptr(),
+                0,
+            );
+            a.check((a.jit_add_object)(self.jit, (a.jit_dylib)(self.jit), buf))?;
+            let mut addr = 0u64;
+            let s = CString::new(symbol).map_err(|e| e.to_string())?;
+            a.check((a.jit_lookup)(self.jit, &mut addr, s.as_ptr()))?;
+            addr as usize
+        };
+        self.linked.insert(key, addr);
+        Ok(addr)
     }
 
-    /// Parses, optimises and compiles `ir`; returns the address of `symbol`.
-    pub fn compile(&mut self, ir: &str, symbol: &str) -> Result<usize, String> {
+    /// Parses and optimises `ir`, and emits it as an object file for this CPU.
+    fn object(&self, ir: &str) -> Result<Vec<u8>, String> {
         let a = &self.api;
-        // SAFETY: the C API is used as documented; ownership of the module passes to the
-        // thread-safe module, and of that to the JIT.
+        // SAFETY: the C API is used as documented; the module and context are disposed of
+        // here, the object's buffer after copying it.
         unsafe {
-            let tsc = (a.tsc_new)();
-            let ctx = (a.tsc_context)(tsc);
+            let ctx = (a.context_new)();
             let name = c"cohort-kernel";
             let buf = (a.membuf)(ir.as_ptr() as *const c_char, ir.len(), name.as_ptr(), 0);
             let mut module: P = std::ptr::null_mut();
@@ -199,23 +258,32 @@ impl Jit {
             if (a.parse)(ctx, buf, &mut module, &mut msg) != 0 {
                 let m = CStr::from_ptr(msg).to_string_lossy().into_owned();
                 (a.dispose_message)(msg);
+                (a.context_dispose)(ctx);
                 return Err(format!("LLVM rejected the vector form: {m}"));
             }
             (a.set_target)(module, a.triple.as_ptr());
             (a.set_data_layout)(module, a.data_layout.as_ptr());
-            let passes = CString::new("default<O2>").expect("no NUL");
-            a.check((a.run_passes)(
+            let passes = c"default<O2>";
+            let optimised = a.check((a.run_passes)(
                 module,
                 passes.as_ptr(),
                 a.tm,
                 (a.pass_options)(),
-            ))?;
-            let tsm = (a.tsm_new)(module, tsc);
-            a.check((a.jit_add)(self.jit, (a.jit_dylib)(self.jit), tsm))?;
-            let mut addr = 0u64;
-            let s = CString::new(symbol).map_err(|e| e.to_string())?;
-            a.check((a.jit_lookup)(self.jit, &mut addr, s.as_ptr()))?;
-            Ok(addr as usize)
+            ));
+            let mut out: P = std::ptr::null_mut();
+            let failed = optimised.is_err() || (a.emit)(a.tm, module, 1, &mut msg, &mut out) != 0;
+            (a.module_dispose)(module);
+            (a.context_dispose)(ctx);
+            optimised?;
+            if failed {
+                let m = CStr::from_ptr(msg).to_string_lossy().into_owned();
+                (a.dispose_message)(msg);
+                return Err(format!("LLVM could not emit the vector form: {m}"));
+            }
+            let bytes =
+                std::slice::from_raw_parts((a.buffer_start)(out), (a.buffer_size)(out)).to_vec();
+            (a.buffer_dispose)(out);
+            Ok(bytes)
         }
     }
 }

@@ -1,8 +1,10 @@
 //! The CPU backend's vector form of a kernel: its naga module lowered to LLVM IR that runs
 //! `W` invocations per call in SIMD lanes (`lower`), compiled at run time by a libLLVM
 //! found on the machine (`llvm`). Kernels it does not cover, and machines without a
-//! libLLVM, keep the host form; `COHORT_CPU_SIMD=0` keeps it everywhere.
+//! libLLVM, keep the host form; where a kernel has both, `choice` picks one.
+//! `COHORT_CPU_SIMD_LOG=1` says which form each kernel runs and why.
 
+mod choice;
 mod expr;
 mod llvm;
 mod lower;
@@ -10,10 +12,11 @@ mod memory;
 mod types;
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use cohort_compiler::CompiledKernel;
 
+pub use choice::{Chooser, Forms};
 pub use types::W as LANES;
 
 /// One binding as the vector form reads it: base address and bound size in bytes.
@@ -61,10 +64,10 @@ impl SimdKernel {
     }
 }
 
-/// Whether the vector form is wanted (`COHORT_CPU_SIMD=0` turns it off).
-pub fn enabled() -> bool {
+/// Whether to say which form each kernel runs (`COHORT_CPU_SIMD_LOG=1`).
+pub(crate) fn log() -> bool {
     static ON: OnceLock<bool> = OnceLock::new();
-    *ON.get_or_init(|| std::env::var("COHORT_CPU_SIMD").map_or(true, |v| v != "0"))
+    *ON.get_or_init(|| std::env::var("COHORT_CPU_SIMD_LOG").is_ok_and(|v| v != "0"))
 }
 
 /// The libLLVM the vector form compiles with, or why there is none.
@@ -84,51 +87,76 @@ pub fn lower_to_llvm_ir(k: &CompiledKernel) -> Result<String, String> {
     lower::lower(k, lower::RUN)
 }
 
-type Cache = Mutex<HashMap<u64, Result<SimdKernel, String>>>;
+/// A kernel's vector form: being compiled, or compiled (or refused, with the reason).
+enum State {
+    Pending,
+    Done(Result<SimdKernel, String>),
+}
 
-/// The vector form of `k`, compiled once per process (keyed by the compilation's id), or
-/// why it has none.
-pub fn compile(k: &CompiledKernel) -> Result<SimdKernel, String> {
+struct Cache {
+    kernels: Mutex<HashMap<u64, State>>,
+    done: Condvar,
+}
+
+fn cache() -> &'static Cache {
     static CACHE: OnceLock<Cache> = OnceLock::new();
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some(r) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&k.id) {
-        return r.clone();
+    CACHE.get_or_init(|| Cache {
+        kernels: Mutex::new(HashMap::new()),
+        done: Condvar::new(),
+    })
+}
+
+/// The vector form of `k` (compiled once per process, keyed by the compilation's id), or
+/// `None` where it has none. The first call starts compiling it on a thread of its own;
+/// until that is done, `wait: false` returns `None` at once (the backend runs the host
+/// form meanwhile, so that LLVM's time does not delay the first dispatch) and
+/// `wait: true` waits for it.
+pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Option<SimdKernel> {
+    let c = cache();
+    let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
+    if let std::collections::hash_map::Entry::Vacant(e) = kernels.entry(k.id) {
+        e.insert(State::Pending);
+        let k = Arc::clone(k);
+        std::thread::spawn(move || {
+            let start = std::time::Instant::now();
+            let r = build(&k);
+            if log() {
+                match &r {
+                    Ok(_) => eprintln!(
+                        "cohort: `{}` has a vector form (compiled in {:.3} s)",
+                        k.name,
+                        start.elapsed().as_secs_f64()
+                    ),
+                    Err(e) => eprintln!("cohort: `{}` has no vector form: {e}", k.name),
+                }
+            }
+            let c = cache();
+            let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
+            kernels.insert(k.id, State::Done(r));
+            c.done.notify_all();
+        });
     }
-    let start = std::time::Instant::now();
-    let r = build(k);
-    if std::env::var("COHORT_CPU_SIMD").is_ok_and(|v| v == "verbose") {
-        match &r {
-            Ok(_) => eprintln!(
-                "cohort: `{}` runs in vector form (compiled in {:.3} s)",
-                k.name,
-                start.elapsed().as_secs_f64()
-            ),
-            Err(e) => eprintln!("cohort: `{}` runs its host form: {e}", k.name),
+    loop {
+        match kernels.get(&k.id) {
+            Some(State::Done(r)) => return r.as_ref().ok().copied(),
+            _ if !wait => return None,
+            _ => kernels = c.done.wait(kernels).unwrap_or_else(|e| e.into_inner()),
         }
     }
-    cache
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .insert(k.id, r.clone());
-    r
 }
 
 fn build(k: &CompiledKernel) -> Result<SimdKernel, String> {
     let jit = llvm::jit().as_ref().map_err(Clone::clone)?;
+    let ir = lower::lower(k, lower::RUN)?;
     let mut jit = jit.lock().unwrap_or_else(|e| e.into_inner());
-    let symbol = jit.fresh_symbol();
-    let ir = lower::lower(k, &symbol)?;
-    let addr = jit.compile(&ir, &symbol).map_err(|e| {
+    let addr = jit.compile(&ir, lower::RUN).map_err(|e| {
         // The lowering wrote IR that LLVM refuses: a bug of this backend, not the kernel's.
         format!(
             "{e} (a Cohort CPU backend bug, kernel `{}` at {})",
             k.name, k.location
         )
     })?;
-    // SAFETY: `symbol` is defined by `lower::driver` with exactly `RunFn`'s signature.
+    // SAFETY: the entry is defined by `lower::driver` with exactly `RunFn`'s signature.
     let run = unsafe { std::mem::transmute::<usize, RunFn>(addr) };
     Ok(SimdKernel { run })
 }
-
-/// Shared handle for commands.
-pub type Shared = Arc<SimdKernel>;

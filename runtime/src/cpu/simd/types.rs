@@ -5,7 +5,7 @@
 use naga::{Module, Scalar, ScalarKind, TypeInner, VectorSize};
 
 /// Lanes per block: one AVX-512 register of `f32`s (two AVX2 registers, four SSE ones).
-pub const W: u32 = 16;
+pub const W: u32 = 8;
 
 pub type Lowering<T> = Result<T, String>;
 
