@@ -60,9 +60,14 @@ pub fn reads_past_the_end(#[builtin(global_index)] gi: u32, xs: &[u32], out: &mu
 
 #[test]
 fn a_panicking_invocation_is_an_error_naming_the_kernel() {
-    let Some(d) = Device::for_tests(BackendKind::Cpu) else {
-        return;
-    };
+    use cohort::runtime::cpu::simd::Forms;
+    // The host form panics; the vector form checks each lane's index.
+    for forms in [Forms::Host, Forms::Vector] {
+        out_of_bounds_is_an_error(Device::cpu_with(forms).unwrap());
+    }
+}
+
+fn out_of_bounds_is_an_error(d: Device) {
     let xs = d.upload(&[1u32; 64]).unwrap();
     let out = d.alloc::<u32>(64).unwrap();
     let err = reads_past_the_end::launch(&d, 64u32, &xs, &out).unwrap_err();
