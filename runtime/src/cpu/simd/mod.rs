@@ -122,10 +122,11 @@ pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Option<SimdKernel> {
             let r = build(&k);
             if log() {
                 match &r {
-                    Ok(_) => eprintln!(
-                        "cohort: `{}` has a vector form (compiled in {:.3} s)",
+                    Ok(v) => eprintln!(
+                        "cohort: `{}` has a vector form (compiled in {:.3} s, entry at {:p})",
                         k.name,
-                        start.elapsed().as_secs_f64()
+                        start.elapsed().as_secs_f64(),
+                        v.run as *const ()
                     ),
                     Err(e) => eprintln!("cohort: `{}` has no vector form: {e}", k.name),
                 }
