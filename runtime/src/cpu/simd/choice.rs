@@ -1,8 +1,9 @@
 //! Which form runs a kernel that has both. The vector form wins on arithmetic-heavy kernels
 //! and can lose on divergent ones (a BVH traversal's lanes walk different nodes and gather
 //! everything they load), and which one wins depends on the scene as much as on the kernel.
-//! So by default the backend measures: each form runs a kernel's first dispatches in turn,
-//! and then the one with less time per invocation keeps it. Both forms compute the same
+//! So by default the backend measures: each form runs one of a kernel's first dispatches,
+//! then the one with less time per invocation (a running average) runs the kernel, and one
+//! dispatch in 16 runs the other to keep its average current. Both forms compute the same
 //! bits, so the choice changes only speed.
 
 use std::collections::HashMap;
@@ -31,16 +32,29 @@ impl Forms {
     }
 }
 
-/// Dispatches each form runs before the choice is made.
-const TRIALS: u32 = 3;
+/// One dispatch in this many runs the form that is currently slower, so that its estimate
+/// follows the workload (a render's first bounces are coherent, its later ones are not).
+const EXPLORE_EVERY: u64 = 16;
+
+/// Weight of a new timing in a form's running estimate.
+const WEIGHT: f64 = 0.25;
 
 #[derive(Default, Clone, Copy)]
 struct Trial {
-    /// Per form (0: vector, 1: host): nanoseconds, invocations and dispatches timed.
-    ns: [u64; 2],
-    invocations: [u64; 2],
-    runs: [u32; 2],
-    chosen: Option<bool>,
+    /// Running estimate of nanoseconds per invocation, per form (0: vector, 1: host).
+    estimate: [Option<f64>; 2],
+    dispatches: u64,
+    /// The form last reported faster (for the log).
+    faster: Option<bool>,
+}
+
+impl Trial {
+    fn vector_faster(&self) -> Option<bool> {
+        match self.estimate {
+            [Some(v), Some(h)] => Some(v <= h),
+            _ => None,
+        }
+    }
 }
 
 /// The measured choices of one device, by kernel name.
@@ -50,12 +64,18 @@ pub struct Chooser {
 }
 
 impl Chooser {
-    /// Whether the next dispatch of `kernel` runs its vector form.
+    /// Whether the next dispatch of `kernel` runs its vector form: each form until it has
+    /// an estimate, then the faster one, and every `EXPLORE_EVERY`-th dispatch the other.
     pub fn vector_next(&self, kernel: &str) -> bool {
         let t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
-        match t.get(kernel) {
-            None => true,
-            Some(tr) => tr.chosen.unwrap_or(tr.runs[0] <= tr.runs[1]),
+        let Some(tr) = t.get(kernel) else {
+            return true;
+        };
+        match (tr.estimate, tr.vector_faster()) {
+            ([None, _], _) => true,
+            ([_, None], _) => false,
+            (_, Some(v)) => v != (tr.dispatches % EXPLORE_EVERY == EXPLORE_EVERY - 1),
+            (_, None) => true,
         }
     }
 
@@ -63,25 +83,20 @@ impl Chooser {
     pub fn record(&self, kernel: &str, vector: bool, ns: u64, invocations: u64) {
         let mut t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
         let tr = t.entry(kernel.to_string()).or_default();
-        if tr.chosen.is_some() {
-            return;
-        }
-        let i = usize::from(!vector);
-        tr.ns[i] += ns;
-        tr.invocations[i] += invocations.max(1);
-        tr.runs[i] += 1;
-        if tr.runs[0] >= TRIALS && tr.runs[1] >= TRIALS {
-            // Compare time per invocation: ns[0]/inv[0] <= ns[1]/inv[1].
-            let vector_wins = u128::from(tr.ns[0]) * u128::from(tr.invocations[1])
-                <= u128::from(tr.ns[1]) * u128::from(tr.invocations[0]);
-            tr.chosen = Some(vector_wins);
+        let x = ns as f64 / invocations.max(1) as f64;
+        let e = &mut tr.estimate[usize::from(!vector)];
+        *e = Some(e.map_or(x, |old| (1.0 - WEIGHT) * old + WEIGHT * x));
+        tr.dispatches += 1;
+        let faster = tr.vector_faster();
+        if faster.is_some() && faster != tr.faster {
+            tr.faster = faster;
             if super::log() {
-                let per = |k: usize| tr.ns[k] as f64 / tr.invocations[k] as f64;
+                let [Some(v), Some(h)] = tr.estimate else {
+                    return;
+                };
                 eprintln!(
-                    "cohort: `{kernel}`: vector form {:.1} ns per invocation, host form {:.1}: runs its {} form",
-                    per(0),
-                    per(1),
-                    if vector_wins { "vector" } else { "host" }
+                    "cohort: `{kernel}`: vector form {v:.1} ns per invocation, host form {h:.1}: runs its {} form",
+                    if v <= h { "vector" } else { "host" }
                 );
             }
         }
