@@ -61,8 +61,8 @@ impl CpuBuffer {
 /// One recorded dispatch.
 pub(crate) struct Cmd {
     name: String,
-    /// The kernel's vector form, where it has one and the device runs them.
-    simd: Option<cpu::simd::SimdKernel>,
+    /// The compiled kernel, for its vector form.
+    code: Option<Arc<cohort_compiler::CompiledKernel>>,
     host: Option<HostKernel>,
     workgroup_size: u32,
     /// The kept buffers (alive until the dispatch ran) and their logical sizes.
@@ -139,14 +139,19 @@ impl CpuDevice {
         })
     }
 
-    /// The vector form of a compiled kernel, when it has one and this device runs them.
-    /// While it is being compiled, a kernel with a host form runs that (measured mode)
-    /// and others wait for it.
-    fn simd_form(&self, kernel: &KernelArtifact) -> Option<cpu::simd::SimdKernel> {
-        match &kernel.code {
-            KernelCode::Compiled(k) if self.forms != cpu::simd::Forms::Host => {
-                let wait = self.forms == cpu::simd::Forms::Vector || kernel.host.is_none();
-                cpu::simd::compiled(k, wait)
+    /// The vector form of a compiled kernel for a dispatch of `invocations`, when it has
+    /// one and this device runs them (see `cpu::simd::compiled`: a kernel with a host form
+    /// runs that until its vector form is ready; others wait for it).
+    fn simd_form(
+        &self,
+        code: &Option<Arc<cohort_compiler::CompiledKernel>>,
+        has_host: bool,
+        invocations: u64,
+    ) -> Option<cpu::simd::SimdKernel> {
+        match code {
+            Some(k) if self.forms != cpu::simd::Forms::Host => {
+                let wait = self.forms == cpu::simd::Forms::Vector || !has_host;
+                cpu::simd::compiled(k, wait, invocations)
             }
             _ => None,
         }
@@ -180,6 +185,14 @@ impl CpuDevice {
             })
             .collect();
         Ok((stats, reads))
+    }
+}
+
+/// The compiled kernel behind an artifact (none for shaders written by hand).
+fn compiled_code(kernel: &KernelArtifact) -> Option<Arc<cohort_compiler::CompiledKernel>> {
+    match &kernel.code {
+        KernelCode::Compiled(k) => Some(Arc::clone(k)),
+        KernelCode::Shaders { .. } => None,
     }
 }
 
@@ -223,7 +236,9 @@ impl CpuDevice {
         if total == 0 {
             return Ok(());
         }
-        let vector = match (cmd.simd, cmd.host) {
+        let invocations = total * u64::from(cmd.workgroup_size);
+        let simd = self.simd_form(&cmd.code, cmd.host.is_some(), invocations);
+        let vector = match (simd, cmd.host) {
             (Some(_), None) => true,
             (Some(_), Some(_)) => {
                 self.forms == cpu::simd::Forms::Vector || self.chooser.vector_next(&cmd.name)
@@ -231,13 +246,12 @@ impl CpuDevice {
             _ => false,
         };
         let start = Instant::now();
-        let ran = match (vector, cmd.simd, cmd.host) {
+        let ran = match (vector, simd, cmd.host) {
             (true, Some(k), _) => run_simd(cmd, k, groups, total as u32),
             (_, _, Some(h)) => run_host(cmd, h, groups, total),
             _ => unreachable!("record_cmd keeps a command only with a form to run"),
         };
-        if cmd.simd.is_some() && cmd.host.is_some() && ran.is_ok() {
-            let invocations = total * u64::from(cmd.workgroup_size);
+        if simd.is_some() && cmd.host.is_some() && ran.is_ok() {
             let ns = start.elapsed().as_nanos() as u64;
             self.chooser.record(&cmd.name, vector, ns, invocations);
         }
@@ -337,7 +351,7 @@ impl Backend for CpuDevice {
 
     /// Starts compiling the kernel's vector form (the host form is part of the program).
     fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.simd_form(kernel);
+        self.simd_form(&compiled_code(kernel), kernel.host.is_some(), 0);
         Ok(())
     }
 
@@ -361,8 +375,8 @@ impl Records for CpuDevice {
         args: &[BufferArg<'_>],
         dispatch: &Dispatch<'_>,
     ) -> Result<Cmd> {
-        let simd = self.simd_form(kernel);
-        if simd.is_none() && kernel.host.is_none() {
+        let code = compiled_code(kernel);
+        if kernel.host.is_none() && self.simd_form(&code, false, 0).is_none() {
             return Err(RuntimeError::MissingFeature {
                 kernel: kernel.name.clone(),
                 backend: BackendKind::Cpu,
@@ -374,7 +388,7 @@ impl Records for CpuDevice {
         let (args, groups) = resolve(kernel, args, dispatch, |raw| raw.get::<CpuBuffer>())?;
         Ok(Cmd {
             name: kernel.name.clone(),
-            simd,
+            code,
             host: kernel.host,
             workgroup_size: kernel.workgroup_size[0],
             args,

@@ -302,7 +302,16 @@ impl Fx<'_> {
         if elem.starts_with('[') || elem.starts_with('{') {
             return Err("a per-lane index into an array of aggregates".into());
         }
-        // Lanes out of range read element 0 (the host form would panic; WGSL clamps).
+        // A lane out of range is an error, as the host form's panic (and reads element 0).
+        let e = self.exec();
+        let ok = self.op(&format!(
+            "icmp ult {}, {}",
+            i.typed()?,
+            splat_const("i32", &n.to_string())
+        ));
+        let nok = self.not(&ok);
+        let bad = self.and(&e, &nok);
+        self.report(&bad);
         let mut acc = self.op(&format!("extractvalue {}, 0", v.typed()?));
         for k in 1..n {
             let x = self.op(&format!("extractvalue {}, {k}", v.typed()?));

@@ -41,17 +41,28 @@ struct Api {
     triple: CString,
 }
 
-/// The process's one JIT (ORC sessions are long-lived; kernels are added to it).
+/// The process's one JIT (ORC sessions are long-lived; kernels are added to it). Linking
+/// (milliseconds) and compiling (up to a second) hold different locks, so that a kernel
+/// whose object is cached links while another one compiles.
 pub struct Jit {
     api: Api,
-    jit: P,
     /// What the objects depend on besides the IR: the library and the host CPU.
     target_key: u64,
+    linker: Mutex<Linker>,
+    /// Held while LLVM optimises and emits (the target machine is not thread-safe).
+    compiling: Mutex<()>,
+}
+
+struct Linker {
+    jit: P,
     /// Entry addresses of the kernels linked so far, by key.
     linked: std::collections::HashMap<u64, usize>,
 }
-// The JIT is used under a mutex only.
+
+// The LLJIT is used under `linker` only and the target machine under `compiling`; the rest
+// of `Api` is immutable function pointers and strings.
 unsafe impl Send for Jit {}
+unsafe impl Sync for Jit {}
 
 const CANDIDATES: &[&str] = &[
     "libLLVM.so.19.1",
@@ -192,9 +203,12 @@ impl Jit {
             add_generator((api.jit_dylib)(jit), g);
             Ok(Jit {
                 api,
-                jit,
                 target_key,
-                linked: Default::default(),
+                linker: Mutex::new(Linker {
+                    jit,
+                    linked: Default::default(),
+                }),
+                compiling: Mutex::new(()),
             })
         }
     }
@@ -204,26 +218,48 @@ impl Jit {
         &self.api.name
     }
 
+    /// The entry address of a kernel's vector form if it is linked already or its object
+    /// file is in the cache (then it is linked now); `None` if it must be compiled.
+    pub fn cached(&self, ir: &str, entry: &str) -> Option<Result<usize, String>> {
+        let key = crate::hash64(self.target_key, ir.as_bytes());
+        if let Some(&addr) = self.lock_linker().linked.get(&key) {
+            return Some(Ok(addr));
+        }
+        let object = std::fs::read(object_file(key)?).ok()?;
+        Some(self.link(key, entry, &object))
+    }
+
     /// Compiles the IR of a kernel's vector form, whose entry function is named `entry`
     /// (or takes its object file from the cache), links it and returns the entry's
     /// address. The same IR is linked once per process.
-    pub fn compile(&mut self, ir: &str, entry: &str) -> Result<usize, String> {
+    pub fn compile(&self, ir: &str, entry: &str) -> Result<usize, String> {
+        if let Some(r) = self.cached(ir, entry) {
+            return r;
+        }
         let key = crate::hash64(self.target_key, ir.as_bytes());
-        if let Some(&addr) = self.linked.get(&key) {
+        let ir = ir.replacen(
+            &format!("@{entry}("),
+            &format!("@{}(", symbol(entry, key)),
+            1,
+        );
+        let object = {
+            let _one = self.compiling.lock().unwrap_or_else(|e| e.into_inner());
+            self.object(&ir)?
+        };
+        crate::disk_cache::save(&object_file(key), &object);
+        self.link(key, entry, &object)
+    }
+
+    fn lock_linker(&self) -> std::sync::MutexGuard<'_, Linker> {
+        self.linker.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Links an object file and returns its entry's address.
+    fn link(&self, key: u64, entry: &str, object: &[u8]) -> Result<usize, String> {
+        let mut l = self.lock_linker();
+        if let Some(&addr) = l.linked.get(&key) {
             return Ok(addr);
         }
-        // One name per IR, so that objects from the cache link under the name they have.
-        let symbol = format!("{entry}_{key:016x}");
-        let ir = ir.replacen(&format!("@{entry}("), &format!("@{symbol}("), 1);
-        let file = crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.o")));
-        let object = match file.as_ref().and_then(|f| std::fs::read(f).ok()) {
-            Some(o) => o,
-            None => {
-                let o = self.object(&ir)?;
-                crate::disk_cache::save(&file, &o);
-                o
-            }
-        };
         let a = &self.api;
         // SAFETY: the C API is used as documented; the JIT takes the buffer.
         let addr = unsafe {
@@ -234,13 +270,13 @@ impl Jit {
                 name.as_ptr(),
                 0,
             );
-            a.check((a.jit_add_object)(self.jit, (a.jit_dylib)(self.jit), buf))?;
+            a.check((a.jit_add_object)(l.jit, (a.jit_dylib)(l.jit), buf))?;
             let mut addr = 0u64;
-            let s = CString::new(symbol).map_err(|e| e.to_string())?;
-            a.check((a.jit_lookup)(self.jit, &mut addr, s.as_ptr()))?;
+            let s = CString::new(symbol(entry, key)).map_err(|e| e.to_string())?;
+            a.check((a.jit_lookup)(l.jit, &mut addr, s.as_ptr()))?;
             addr as usize
         };
-        self.linked.insert(key, addr);
+        l.linked.insert(key, addr);
         Ok(addr)
     }
 
@@ -301,9 +337,19 @@ impl Api {
     }
 }
 
+/// One name per IR, so that objects from the cache link under the name they were built with.
+fn symbol(entry: &str, key: u64) -> String {
+    format!("{entry}_{key:016x}")
+}
+
+/// Where the object file of the IR with key `key` is cached.
+fn object_file(key: u64) -> Option<std::path::PathBuf> {
+    crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.o")))
+}
+
 /// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
 /// usable libLLVM).
-pub fn jit() -> &'static Result<Mutex<Jit>, String> {
-    static JIT: std::sync::OnceLock<Result<Mutex<Jit>, String>> = std::sync::OnceLock::new();
-    JIT.get_or_init(|| Jit::new().map(Mutex::new))
+pub fn jit() -> &'static Result<Jit, String> {
+    static JIT: std::sync::OnceLock<Result<Jit, String>> = std::sync::OnceLock::new();
+    JIT.get_or_init(Jit::new)
 }

@@ -183,7 +183,7 @@ impl Fx<'_> {
     }
 
     /// Sets the error flag if any lane of `bad` is on.
-    fn report(&mut self, bad: &str) {
+    pub fn report(&mut self, bad: &str) {
         let any = self.any(bad);
         let (fail, ok) = (self.label(), self.label());
         self.line(&format!("br i1 {any}, label %{fail}, label %{ok}"));

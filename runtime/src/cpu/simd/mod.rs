@@ -73,11 +73,7 @@ pub(crate) fn log() -> bool {
 /// The libLLVM the vector form compiles with, or why there is none.
 pub fn llvm_library() -> Result<String, String> {
     match llvm::jit() {
-        Ok(j) => Ok(j
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .library()
-            .to_string()),
+        Ok(j) => Ok(j.library().to_string()),
         Err(e) => Err(e.clone()),
     }
 }
@@ -87,8 +83,16 @@ pub fn lower_to_llvm_ir(k: &CompiledKernel) -> Result<String, String> {
     lower::lower(k, lower::RUN)
 }
 
-/// A kernel's vector form: being compiled, or compiled (or refused, with the reason).
+/// Invocations a kernel runs in its host form before its vector form is compiled (about a
+/// tenth of a second of work on one core): short runs, such as tests and thumbnails, never
+/// wait for LLVM; anything longer compiles once per machine (objects are cached on disk)
+/// and loads the object from then on.
+pub const HOT_INVOCATIONS: u64 = 1 << 20;
+
+/// A kernel's vector form: not compiled (with the invocations its host form has run),
+/// being compiled, or compiled (or refused, with the reason).
 enum State {
+    Cold(u64),
     Pending,
     Done(Result<SimdKernel, String>),
 }
@@ -106,36 +110,29 @@ fn cache() -> &'static Cache {
     })
 }
 
-/// The vector form of `k` (compiled once per process, keyed by the compilation's id), or
-/// `None` where it has none. The first call starts compiling it on a thread of its own;
-/// until that is done, `wait: false` returns `None` at once (the backend runs the host
-/// form meanwhile, so that LLVM's time does not delay the first dispatch) and
-/// `wait: true` waits for it.
-pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Option<SimdKernel> {
+/// The vector form of `k` for a dispatch of `invocations`, or `None` where it has none
+/// yet. The first call links it if its object file is cached. Otherwise it is compiled,
+/// on a thread of its own, once the kernel has run `HOT_INVOCATIONS` (at once with
+/// `wait`); until then `wait: false` returns `None` (the backend runs the host form, so
+/// that LLVM's time never delays a dispatch) and `wait: true` waits for it.
+pub fn compiled(k: &Arc<CompiledKernel>, wait: bool, invocations: u64) -> Option<SimdKernel> {
     let c = cache();
     let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
-    if let std::collections::hash_map::Entry::Vacant(e) = kernels.entry(k.id) {
-        e.insert(State::Pending);
-        let k = Arc::clone(k);
-        std::thread::spawn(move || {
-            let start = std::time::Instant::now();
-            let r = build(&k);
-            if log() {
-                match &r {
-                    Ok(v) => eprintln!(
-                        "cohort: `{}` has a vector form (compiled in {:.3} s, entry at {:p})",
-                        k.name,
-                        start.elapsed().as_secs_f64(),
-                        v.run as *const ()
-                    ),
-                    Err(e) => eprintln!("cohort: `{}` has no vector form: {e}", k.name),
-                }
-            }
-            let c = cache();
-            let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
-            kernels.insert(k.id, State::Done(r));
-            c.done.notify_all();
-        });
+    if !kernels.contains_key(&k.id) {
+        drop(kernels);
+        let first = match probe(k) {
+            Some(r) => State::Done(r),
+            None => State::Cold(0),
+        };
+        kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
+        kernels.entry(k.id).or_insert(first);
+    }
+    if let Some(State::Cold(n)) = kernels.get_mut(&k.id) {
+        *n += invocations;
+        if wait || *n >= HOT_INVOCATIONS {
+            kernels.insert(k.id, State::Pending);
+            spawn_build(Arc::clone(k));
+        }
     }
     loop {
         match kernels.get(&k.id) {
@@ -146,10 +143,54 @@ pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Option<SimdKernel> {
     }
 }
 
+/// The vector form of `k` without compiling: linked from the object cache, or refused
+/// (no libLLVM, or a construct the lowering does not cover); `None`: it must be compiled.
+fn probe(k: &CompiledKernel) -> Option<Result<SimdKernel, String>> {
+    let jit = match llvm::jit() {
+        Ok(j) => j,
+        Err(e) => return Some(Err(e.clone())),
+    };
+    let ir = match lower::lower(k, lower::RUN) {
+        Ok(ir) => ir,
+        Err(e) => return Some(Err(e)),
+    };
+    let r = jit.cached(&ir, lower::RUN)?.map(entry);
+    if log() {
+        if let Ok(v) = &r {
+            eprintln!(
+                "cohort: `{}` has a vector form (from the cache, entry at {:p})",
+                k.name, v.run as *const ()
+            );
+        }
+    }
+    Some(r)
+}
+
+fn spawn_build(k: Arc<CompiledKernel>) {
+    std::thread::spawn(move || {
+        let start = std::time::Instant::now();
+        let r = build(&k);
+        if log() {
+            match &r {
+                Ok(v) => eprintln!(
+                    "cohort: `{}` has a vector form (compiled in {:.3} s, entry at {:p})",
+                    k.name,
+                    start.elapsed().as_secs_f64(),
+                    v.run as *const ()
+                ),
+                Err(e) => eprintln!("cohort: `{}` has no vector form: {e}", k.name),
+            }
+        }
+        let c = cache();
+        let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
+        kernels.insert(k.id, State::Done(r));
+        c.done.notify_all();
+    });
+}
+
 fn build(k: &CompiledKernel) -> Result<SimdKernel, String> {
     let jit = llvm::jit().as_ref().map_err(Clone::clone)?;
     let ir = lower::lower(k, lower::RUN)?;
-    let mut jit = jit.lock().unwrap_or_else(|e| e.into_inner());
     let addr = jit.compile(&ir, lower::RUN).map_err(|e| {
         // The lowering wrote IR that LLVM refuses: a bug of this backend, not the kernel's.
         format!(
@@ -157,7 +198,11 @@ fn build(k: &CompiledKernel) -> Result<SimdKernel, String> {
             k.name, k.location
         )
     })?;
+    Ok(entry(addr))
+}
+
+fn entry(addr: usize) -> SimdKernel {
     // SAFETY: the entry is defined by `lower::driver` with exactly `RunFn`'s signature.
     let run = unsafe { std::mem::transmute::<usize, RunFn>(addr) };
-    Ok(SimdKernel { run })
+    SimdKernel { run }
 }
