@@ -13,12 +13,15 @@ if [ -z "${BIN:-}" ]; then
   cargo build --release --locked -p cohort-cli
   BIN=target/release/cohort
 fi
+BIN=$(realpath "$BIN")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%FT%TZ); commit $(git rev-parse --short HEAD)"
+# Renders run in the temporary folder: `cohort render` also writes render.png where it runs.
+[ -f "$SCENE" ] && SCENE=$(realpath "$SCENE")
 render() {
-  COHORT_CPU_SIMD="$1" COHORT_CPU_SIMD_LOG=1 "$BIN" render --backend cpu --scene "$SCENE" \
-    --width 256 --height 256 --paths 32 --out "$out/$1.exr" 2>&1
+  (cd "$out" && COHORT_CPU_SIMD="$1" COHORT_CPU_SIMD_LOG=1 "$BIN" render --backend cpu --scene "$SCENE" \
+    --width 256 --height 256 --paths 32 --out "$out/$1.exr" 2>&1)
 }
 render vector >/dev/null
 for r in $(seq "$ROUNDS"); do
