@@ -1,7 +1,9 @@
-//! The native CPU backend: buffers in host memory, and dispatches that run the kernel's own
-//! Rust function (`KernelArtifact::host`) for every invocation, workgroups spread over all
-//! cores by rayon (`cpu::lanes` runs one workgroup). Submissions run when they are made,
-//! so a `Submission` is already complete; timestamps are wall time.
+//! The native CPU backend: buffers in host memory, and dispatches that run, for every
+//! invocation, the kernel's own Rust function (`KernelArtifact::host`, `cpu::lanes` runs one
+//! workgroup) or its vector form (`cpu::simd`, a block of lanes per call), whichever
+//! `cpu::simd::Chooser` measures faster; workgroups are spread over all cores by rayon.
+//! Submissions run when they are made, so a `Submission` is already complete; timestamps
+//! are wall time.
 
 use std::cell::{RefCell, UnsafeCell};
 use std::panic::AssertUnwindSafe;
