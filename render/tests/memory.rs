@@ -47,8 +47,18 @@ fn render_once(device: &Device, scene: &cohort_scenes::Scene) {
 #[test]
 fn renderers_created_in_a_loop_run_in_flat_memory() {
     let scene = cohort_scenes::embedded::load("cornell").expect("embedded cornell box");
-    for kind in [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu] {
-        let Some(device) = Device::for_tests(kind) else {
+    use cohort::runtime::cpu::simd::Forms;
+    // The CPU backend with each form of its kernels. Vector forms compile during the
+    // warm-up (LLVM's own memory, once per process, is not a renderer's); with measured
+    // forms they would compile whenever a kernel gets hot, in the middle of the rounds.
+    let devices = [
+        (BackendKind::Wgpu, Device::for_tests(BackendKind::Wgpu)),
+        (BackendKind::Vulkan, Device::for_tests(BackendKind::Vulkan)),
+        (BackendKind::Cpu, Device::cpu_with(Forms::Host).ok()),
+        (BackendKind::Cpu, Device::cpu_with(Forms::Vector).ok()),
+    ];
+    for (kind, device) in devices {
+        let Some(device) = device else {
             continue;
         };
         for _ in 0..WARM_UP {
@@ -64,8 +74,9 @@ fn renderers_created_in_a_loop_run_in_flat_memory() {
         let growth = after.saturating_sub(before);
         let mb = |b: u64| b as f64 / (1 << 20) as f64;
         println!(
-            "{}: resident {:.1} MB after warm-up, {:.1} MB after {ROUNDS} more renderers (+{:.1} MB); per round: {:?}",
+            "{} ({}): resident {:.1} MB after warm-up, {:.1} MB after {ROUNDS} more renderers (+{:.1} MB); per round: {:?}",
             kind.name(),
+            device.info().driver,
             mb(before),
             mb(after),
             mb(growth),
