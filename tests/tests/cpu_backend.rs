@@ -179,3 +179,106 @@ fn only_waiting_operations_make_a_kernel_synchronise() {
     let subgroups = cohort::Spec::portable(&divergent_subgroups::INFO, Group::Thread);
     assert!(synchronises(&divergent_subgroups::build(&subgroups)));
 }
+
+/// Reads and writes at `order[gi]` under a divergent condition: where a block's lanes
+/// land on consecutive elements the vector form moves them with one wide masked load or
+/// store, elsewhere it gathers and scatters; both must touch exactly the elements the
+/// host form touches. `xs[j].y` reads one member of each element (a sparse wide load).
+#[kernel(workgroup = 64)]
+pub fn permuted_copies(
+    #[builtin(global_index)] gi: u32,
+    order: &[u32],
+    xs: &[Vec4],
+    ys: &[u32],
+    out4: &mut [Vec4],
+    out1: &mut [u32],
+) {
+    let j = order[gi as usize] as usize;
+    if j % 3 != 1 {
+        let v = xs[j];
+        out4[j] = v * 2.0 + Vec4::splat(ys[j] as f32);
+        out1[j] = ys[j] + xs[j].y.to_bits();
+    }
+}
+
+/// The orders `permuted_copies` runs with, over `n` (a multiple of 16) elements: blocks of
+/// eight in place, blocks moved to the other half of their sixteen (consecutive, another
+/// base), halves swapped within a block (not consecutive), reversed, and a shuffle.
+fn orders(n: u32) -> Vec<(&'static str, Vec<u32>)> {
+    let mut rng = common::Rng(0x9e37_79b9);
+    let mut shuffled: Vec<u32> = (0..n).collect();
+    for i in (1..n as usize).rev() {
+        let k = rng.next_u32() as usize % (i + 1);
+        shuffled.swap(i, k);
+    }
+    vec![
+        ("identity", (0..n).collect()),
+        ("blocks moved", (0..n).map(|i| i ^ 8).collect()),
+        ("halves swapped", (0..n).map(|i| i ^ 4).collect()),
+        ("reversed", (0..n).rev().collect()),
+        ("shuffled", shuffled),
+    ]
+}
+
+#[test]
+fn consecutive_and_scattered_accesses_touch_what_the_host_form_touches() {
+    let n = 1024u32;
+    let xs: Vec<Vec4> = (0..n)
+        .map(|i| Vec4::new(i as f32, -(i as f32), 0.5 * i as f32, 1.0e6 + i as f32))
+        .collect();
+    let ys: Vec<u32> = (0..n).map(|i| i * 7 + 3).collect();
+    for (what, order) in orders(n) {
+        // Untouched elements keep their sentinel: a store must not write masked-off lanes.
+        let mut want4 = vec![Vec4::splat(-7.0); n as usize];
+        let mut want1 = vec![0xdead_beefu32; n as usize];
+        for &j in &order {
+            let j = j as usize;
+            if j % 3 != 1 {
+                want4[j] = xs[j] * 2.0 + Vec4::splat(ys[j] as f32);
+                want1[j] = ys[j] + xs[j].y.to_bits();
+            }
+        }
+        for d in common::devices() {
+            let order_b = d.upload(&order).unwrap();
+            let xs_b = d.upload(&xs).unwrap();
+            let ys_b = d.upload(&ys).unwrap();
+            let out4 = d.upload(&vec![Vec4::splat(-7.0); n as usize]).unwrap();
+            let out1 = d.upload(&vec![0xdead_beefu32; n as usize]).unwrap();
+            permuted_copies::launch(&d, n, &order_b, &xs_b, &ys_b, &out4, &out1).unwrap();
+            let name = d.info().adapter_name.clone();
+            assert_eq!(d.read(&out4).unwrap(), want4, "{what}, {name}");
+            assert_eq!(d.read(&out1).unwrap(), want1, "{what}, {name}");
+        }
+    }
+}
+
+/// A per-lane index into a vector value.
+#[kernel(workgroup = 64)]
+pub fn picks_a_component(#[builtin(global_index)] gi: u32, ks: &[u32], out: &mut [f32]) {
+    let v = Vec4::new(1.0, 2.0, 3.0, 4.0);
+    out[gi as usize] = v[ks[gi as usize] as usize];
+}
+
+#[test]
+fn a_vector_index_out_of_range_is_an_error_in_both_forms() {
+    use cohort::runtime::cpu::simd::Forms;
+    for forms in [Forms::Host, Forms::Vector] {
+        let d = Device::cpu_with(forms).unwrap();
+        let ks: Vec<u32> = (0..64).map(|i| i % 4).collect();
+        let ks_b = d.upload(&ks).unwrap();
+        let out = d.alloc::<f32>(64).unwrap();
+        picks_a_component::launch(&d, 64u32, &ks_b, &out).unwrap();
+        let want: Vec<f32> = ks.iter().map(|&k| (k + 1) as f32).collect();
+        assert_eq!(d.read(&out).unwrap(), want, "{forms:?}");
+        // One lane past the end, in the middle of a block.
+        let mut bad = ks.clone();
+        bad[13] = 4;
+        let bad_b = d.upload(&bad).unwrap();
+        let err = picks_a_component::launch(&d, 64u32, &bad_b, &out).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("picks_a_component") && msg.contains("index out of bounds"),
+            "{forms:?}: {msg}"
+        );
+    }
+}

@@ -25,12 +25,30 @@ pub enum Root {
         path: Vec<Idx>,
     },
     /// Binding `g` of the `env` table, at byte offset `konst` plus `dynamic` (`<W x i64>`,
-    /// when the lanes' offsets differ).
+    /// when the lanes' offsets differ). `stride`: the stride of the array the last
+    /// per-lane index stepped through, so that lanes indexing consecutive elements (a
+    /// path's state at its own slot) can be told at run time and read with one wide load.
     Buf {
         g: usize,
         konst: u64,
         dynamic: Option<String>,
+        stride: u64,
     },
+}
+
+/// A plan for reading or writing consecutive lanes' elements as one vector of 32-bit
+/// words (`Fx::wide_plan`): `m` words per lane and each leaf's (path, scalar, word).
+pub struct Wide {
+    m: u64,
+    leaves: Vec<(Vec<u32>, &'static str, u64)>,
+}
+
+/// Where lane 0's element of a wide access starts: binding `g`, byte offset `konst` plus
+/// `base0` (an `i64` value).
+pub struct WideAt {
+    g: usize,
+    konst: u64,
+    base0: String,
 }
 
 #[derive(Clone, Debug)]
@@ -70,6 +88,7 @@ impl Fx<'_> {
                 g: pos,
                 konst: 0,
                 dynamic: None,
+                stride: 0,
             },
             ty: self.m.types[gv.ty].inner.clone(),
         }))
@@ -119,7 +138,9 @@ impl Fx<'_> {
                     path,
                 }
             }
-            Root::Buf { g, konst, dynamic } => {
+            Root::Buf {
+                g, konst, dynamic, ..
+            } => {
                 let ext = if kind == ScalarKind::Sint {
                     "sext"
                 } else {
@@ -139,6 +160,7 @@ impl Fx<'_> {
                     g,
                     konst,
                     dynamic: Some(sum),
+                    stride: u64::from(stride),
                 }
             }
         };
@@ -173,10 +195,16 @@ impl Fx<'_> {
                     path,
                 }
             }
-            Root::Buf { g, konst, dynamic } => Root::Buf {
+            Root::Buf {
+                g,
+                konst,
+                dynamic,
+                stride,
+            } => Root::Buf {
                 g,
                 konst: konst + offset,
                 dynamic,
+                stride,
             },
         };
         Ok(Val::P(Place { root, ty }))
@@ -212,7 +240,9 @@ impl Fx<'_> {
                     }
                 }
             }
-            Root::Buf { g, konst, dynamic } => {
+            Root::Buf {
+                g, konst, dynamic, ..
+            } => {
                 let size = self.buffer_size(*g);
                 let end = konst + byte_size(self.m, &p.ty);
                 let c = match dynamic {
@@ -273,7 +303,9 @@ impl Fx<'_> {
         let mut out = Vec::with_capacity(ls.len());
         let pv = lanes("ptr");
         match &p.root {
-            Root::Buf { g, konst, dynamic } => {
+            Root::Buf {
+                g, konst, dynamic, ..
+            } => {
                 let base = self.buffer_base(*g);
                 for l in ls {
                     let s = scalar(l.scalar)?.to_string();
@@ -369,6 +401,7 @@ impl Fx<'_> {
             g,
             konst,
             dynamic: Some(d),
+            ..
         } = &p.root
         {
             return self.load_maybe_uniform(p, &ty, *g, *konst, d, &mask);
@@ -376,9 +409,11 @@ impl Fx<'_> {
         self.gather(p, &ty, &mask)
     }
 
-    /// A buffer load at per-lane offsets that, when every lane that loads reads the same
-    /// address (the root of a BVH, a shared triangle), loads once and broadcasts instead
-    /// of gathering: the same values, far fewer memory operations.
+    /// A buffer load at per-lane offsets. When every lane that loads reads the same
+    /// address (the root of a BVH, a shared triangle) it loads once and broadcasts; when
+    /// the lanes read consecutive elements (a path's state at its own slot) it loads them
+    /// with one wide masked load; otherwise it gathers. The same values each way, far
+    /// fewer memory operations in the first two.
     fn load_maybe_uniform(
         &mut self,
         p: &Place,
@@ -388,16 +423,9 @@ impl Fx<'_> {
         d: &str,
         mask: &str,
     ) -> Lowering<Val> {
-        let m = Fx::mask_ty();
         let v64 = lanes("i64");
-        let w = super::types::W;
         let slot = self.alloca(ty);
-        let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
-        self.declare(&format!("declare i{w} @llvm.cttz.i{w}(i{w}, i1)"));
-        let first = self.op(&format!("call i{w} @llvm.cttz.i{w}(i{w} {bits}, i1 false)"));
-        let first = self.op(&format!("zext i{w} {first} to i32"));
-        let first = self.op(&format!("and i32 {first}, {}", w - 1));
-        let d0 = self.op(&format!("extractelement {v64} {d}, i32 {first}"));
+        let (first, d0) = self.first_lane(mask, d);
         let all = self.splat("i64", &d0);
         let same = self.op(&format!("icmp eq {v64} {d}, {all}"));
         let differ = self.not(&same);
@@ -411,32 +439,37 @@ impl Fx<'_> {
         self.line(&format!("br i1 {any}, label %{load}, label %{skip}"));
         self.body.push_str(&format!("{load}:\n"));
         let base = self.buffer_base(g);
-        let mut acc = "poison".to_string();
-        let ls = leaves(self.m, &p.ty)?;
-        let single = ls.len() == 1 && ls[0].path.is_empty();
-        for l in ls {
+        let mut parts = Vec::new();
+        for l in leaves(self.m, &p.ty)? {
             let s = scalar(l.scalar)?;
             let at = self.op(&format!("add i64 {d0}, {}", konst + l.offset));
             let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {at}"));
             let x = self.op(&format!("load {s}, ptr {ptr}, align 4"));
             let x = self.splat(s, &x);
-            if single {
-                acc = x;
-            } else {
-                let at: Vec<String> = l.path.iter().map(|c| c.to_string()).collect();
-                acc = self.op(&format!(
-                    "insertvalue {ty} {acc}, {} {x}, {}",
-                    lanes(s),
-                    at.join(", ")
-                ));
-            }
+            parts.push((l.path, lanes(s), x));
         }
+        let acc = self.assemble(ty, parts);
         self.line(&format!("store {ty} {acc}, ptr {slot}"));
         self.line(&format!("br label %{join}"));
         self.body.push_str(&format!("{skip}:\n"));
         self.line(&format!("store {ty} zeroinitializer, ptr {slot}"));
         self.line(&format!("br label %{join}"));
         self.body.push_str(&format!("{many}:\n"));
+        let stride = match p.root {
+            Root::Buf { stride, .. } => stride,
+            _ => 0,
+        };
+        if let Some(plan) = self.wide_plan(p, stride) {
+            let (ok, base0) = self.consecutive(d, &first, &d0, stride, mask);
+            let (wide, scattered) = (self.label(), self.label());
+            self.line(&format!("br i1 {ok}, label %{wide}, label %{scattered}"));
+            self.body.push_str(&format!("{wide}:\n"));
+            let at = WideAt { g, konst, base0 };
+            let v = self.wide_load(&at, &plan, mask, ty);
+            self.line(&format!("store {ty} {v}, ptr {slot}"));
+            self.line(&format!("br label %{join}"));
+            self.body.push_str(&format!("{scattered}:\n"));
+        }
         let v = self.gather(p, ty, mask)?;
         self.line(&format!("store {}, ptr {slot}", v.typed()?));
         self.line(&format!("br label %{join}"));
@@ -445,13 +478,231 @@ impl Fx<'_> {
         Ok(Val::r(ty, r))
     }
 
+    /// The first lane on in `mask` (`W - 1` when none is) and that lane's offset in `d`.
+    fn first_lane(&mut self, mask: &str, d: &str) -> (String, String) {
+        let m = Fx::mask_ty();
+        let w = super::types::W;
+        let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
+        self.declare(&format!("declare i{w} @llvm.cttz.i{w}(i{w}, i1)"));
+        let first = self.op(&format!("call i{w} @llvm.cttz.i{w}(i{w} {bits}, i1 false)"));
+        let first = self.op(&format!("zext i{w} {first} to i32"));
+        let first = self.op(&format!("and i32 {first}, {}", w - 1));
+        let d0 = self.op(&format!("extractelement {} {d}, i32 {first}", lanes("i64")));
+        (first, d0)
+    }
+
+    /// Whether every lane of `mask` sits at `base0 + stride * lane`, with `base0` the offset
+    /// lane 0 would have (from the first lane's offset `d0`): `(i1, base0)`.
+    fn consecutive(
+        &mut self,
+        d: &str,
+        first: &str,
+        d0: &str,
+        stride: u64,
+        mask: &str,
+    ) -> (String, String) {
+        let v64 = lanes("i64");
+        let f64_ = self.op(&format!("zext i32 {first} to i64"));
+        let back = self.op(&format!("mul i64 {f64_}, {stride}"));
+        let base0 = self.op(&format!("sub i64 {d0}, {back}"));
+        let steps: Vec<String> = (0..u64::from(super::types::W))
+            .map(|k| format!("i64 {}", k * stride))
+            .collect();
+        let b = self.splat("i64", &base0);
+        let expect = self.op(&format!("add {v64} {b}, <{}>", steps.join(", ")));
+        let off = self.op(&format!("icmp ne {v64} {d}, {expect}"));
+        let bad = self.and(mask, &off);
+        let any = self.any(&bad);
+        let ok = self.op(&format!("xor i1 {any}, true"));
+        (ok, base0)
+    }
+
+    /// How consecutive lanes of a place read as one wide vector of 32-bit words: `m` words
+    /// per lane (the array's stride), and each leaf's path, scalar and word in the lane's
+    /// block. `None` where that does not pay: no stride, leaves that are not 32-bit
+    /// words, or elements mostly of other members (a material's one field), whose wide
+    /// load would be longer than the gathers it replaces.
+    fn wide_plan(&self, p: &Place, stride: u64) -> Option<Wide> {
+        if stride == 0 || stride % 4 != 0 {
+            return None;
+        }
+        let m = stride / 4;
+        let ls = leaves(self.m, &p.ty).ok()?;
+        if m > 4 * ls.len() as u64 || m * u64::from(super::types::W) > 256 {
+            return None;
+        }
+        let mut leaves_out = Vec::with_capacity(ls.len());
+        for l in ls {
+            let s = scalar(l.scalar).ok()?;
+            if s == "i1" || l.offset % 4 != 0 || l.offset + 4 > stride {
+                return None;
+            }
+            leaves_out.push((l.path, s, l.offset / 4));
+        }
+        Some(Wide {
+            m,
+            leaves: leaves_out,
+        })
+    }
+
+    /// `<W*m x i1>`: lane `k`'s mask bit on the words of its block that `plan` reads.
+    fn wide_mask(&mut self, plan: &Wide, mask: &str) -> (String, String) {
+        let w = u64::from(super::types::W);
+        let n = w * plan.m;
+        let spread: Vec<String> = (0..n).map(|j| format!("i32 {}", j / plan.m)).collect();
+        let e = self.op(&format!(
+            "shufflevector {} {mask}, {} poison, <{n} x i32> <{}>",
+            Fx::mask_ty(),
+            Fx::mask_ty(),
+            spread.join(", ")
+        ));
+        let used: Vec<String> = (0..n)
+            .map(|j| {
+                let on = plan.leaves.iter().any(|l| l.2 == j % plan.m);
+                format!("i1 {on}")
+            })
+            .collect();
+        let ty = format!("<{n} x i1>");
+        let e = self.op(&format!("and {ty} {e}, <{}>", used.join(", ")));
+        (e, ty)
+    }
+
+    /// The address of lane 0's block: binding `g`'s base plus `konst + base0`.
+    fn wide_pointer(&mut self, at: &WideAt) -> String {
+        let base = self.buffer_base(at.g);
+        let off = self.op(&format!("add i64 {}, {}", at.base0, at.konst));
+        self.op(&format!("getelementptr i8, ptr {base}, i64 {off}"))
+    }
+
+    /// Loads consecutive lanes' blocks with one masked load and picks each leaf's lanes.
+    fn wide_load(&mut self, at: &WideAt, plan: &Wide, mask: &str, ty: &str) -> String {
+        let w = u64::from(super::types::W);
+        let n = w * plan.m;
+        let ptr = self.wide_pointer(at);
+        let (e, mty) = self.wide_mask(plan, mask);
+        let vt = format!("<{n} x i32>");
+        self.declare(&format!(
+            "declare {vt} @llvm.masked.load.v{n}i32.p0(ptr, i32, {mty}, {vt})"
+        ));
+        let wide = self.op(&format!(
+            "call {vt} @llvm.masked.load.v{n}i32.p0(ptr {ptr}, i32 4, {mty} {e}, {vt} zeroinitializer)"
+        ));
+        let mut parts = Vec::with_capacity(plan.leaves.len());
+        for (path, s, word) in &plan.leaves {
+            let pick: Vec<String> = (0..w)
+                .map(|k| format!("i32 {}", word + k * plan.m))
+                .collect();
+            let x = self.op(&format!(
+                "shufflevector {vt} {wide}, {vt} poison, {} <{}>",
+                lanes("i32"),
+                pick.join(", ")
+            ));
+            let x = if *s == "i32" {
+                x
+            } else {
+                self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
+            };
+            parts.push((path.clone(), lanes(s), x));
+        }
+        self.assemble(ty, parts)
+    }
+
+    /// Stores consecutive lanes' leaves of `value` with one masked store.
+    fn wide_store(&mut self, at: &WideAt, plan: &Wide, mask: &str, value: &Val) -> Lowering<()> {
+        let w = u64::from(super::types::W);
+        let n = w * plan.m;
+        let i32v = lanes("i32");
+        // Each leaf as `<W x i32>`, then concatenated pairwise into one vector of
+        // `W * P` words (P a power of two, the padding poison).
+        let mut level = Vec::with_capacity(plan.leaves.len());
+        for (path, s, _) in &plan.leaves {
+            let x = self.leaf_of(value, path)?;
+            let x = if *s == "i32" {
+                x
+            } else {
+                self.op(&format!("bitcast {} {x} to {i32v}", lanes(s)))
+            };
+            level.push(x);
+        }
+        let mut len = w;
+        while level.len() > 1 {
+            if level.len() % 2 == 1 {
+                level.push("poison".to_string());
+            }
+            let ids: Vec<String> = (0..2 * len).map(|j| format!("i32 {j}")).collect();
+            let mut next = Vec::with_capacity(level.len() / 2);
+            for pair in level.chunks(2) {
+                next.push(self.op(&format!(
+                    "shufflevector <{len} x i32> {}, <{len} x i32> {}, <{} x i32> <{}>",
+                    pair[0],
+                    pair[1],
+                    2 * len,
+                    ids.join(", ")
+                )));
+            }
+            level = next;
+            len *= 2;
+        }
+        let joined = level.pop().ok_or("a store of no leaves")?;
+        let place: Vec<String> = (0..n)
+            .map(|j| {
+                let (k, word) = (j / plan.m, j % plan.m);
+                match plan.leaves.iter().position(|l| l.2 == word) {
+                    Some(leaf) => format!("i32 {}", leaf as u64 * w + k),
+                    None => "i32 undef".to_string(),
+                }
+            })
+            .collect();
+        let vt = format!("<{n} x i32>");
+        let wide = self.op(&format!(
+            "shufflevector <{len} x i32> {joined}, <{len} x i32> poison, <{n} x i32> <{}>",
+            place.join(", ")
+        ));
+        let ptr = self.wide_pointer(at);
+        let (e, mty) = self.wide_mask(plan, mask);
+        self.declare(&format!(
+            "declare void @llvm.masked.store.v{n}i32.p0({vt}, ptr, i32, {mty})"
+        ));
+        self.line(&format!(
+            "call void @llvm.masked.store.v{n}i32.p0({vt} {wide}, ptr {ptr}, i32 4, {mty} {e})"
+        ));
+        Ok(())
+    }
+
+    /// The leaf at `path` of `value` (the value itself for an empty path).
+    fn leaf_of(&mut self, value: &Val, path: &[u32]) -> Lowering<String> {
+        if path.is_empty() {
+            return Ok(value.v()?.to_string());
+        }
+        let at: Vec<String> = path.iter().map(|c| c.to_string()).collect();
+        Ok(self.op(&format!(
+            "extractvalue {}, {}",
+            value.typed()?,
+            at.join(", ")
+        )))
+    }
+
+    /// A value of LLVM type `ty` from its leaves (path, vector type, value); a scalar
+    /// type's one leaf is the value itself.
+    fn assemble(&mut self, ty: &str, parts: Vec<(Vec<u32>, String, String)>) -> String {
+        if parts.len() == 1 && parts[0].0.is_empty() {
+            return parts[0].2.clone();
+        }
+        let mut acc = "poison".to_string();
+        for (path, vt, x) in parts {
+            let at: Vec<String> = path.iter().map(|c| c.to_string()).collect();
+            acc = self.op(&format!(
+                "insertvalue {ty} {acc}, {vt} {x}, {}",
+                at.join(", ")
+            ));
+        }
+        acc
+    }
+
     /// Loads each scalar leaf with a masked gather.
     fn gather(&mut self, p: &Place, ty: &str, mask: &str) -> Lowering<Val> {
-        let ty = ty.to_string();
-        let mut acc = "poison".to_string();
-        let parts = self.leaf_pointers(p)?;
-        let single = parts.len() == 1 && parts[0].0.is_empty();
-        for (path, s, ptrs) in parts {
+        let mut parts = Vec::new();
+        for (path, s, ptrs) in self.leaf_pointers(p)? {
             let sfx = intrinsic_suffix(&s);
             let v = lanes(&s);
             self.declare(&format!(
@@ -466,18 +717,14 @@ impl Fx<'_> {
                 Fx::mask_ty(),
                 w = super::types::W
             ));
-            if single {
-                return Ok(Val::r(ty, x));
-            }
-            let at: Vec<String> = path.iter().map(|c| c.to_string()).collect();
-            acc = self.op(&format!(
-                "insertvalue {ty} {acc}, {v} {x}, {}",
-                at.join(", ")
-            ));
+            parts.push((path, v, x));
         }
+        let acc = self.assemble(ty, parts);
         Ok(Val::r(ty, acc))
     }
 
+    /// Stores `value` under `mask`: one wide masked store where the lanes' elements are
+    /// consecutive, else a masked scatter per leaf.
     pub fn store(&mut self, p: &Place, value: &Val, mask: &str) -> Lowering<()> {
         let ty = value_type(self.m, &p.ty)?;
         if let Some(addr) = self.uniform_local(p) {
@@ -487,18 +734,37 @@ impl Fx<'_> {
             return Ok(());
         }
         let mask = self.in_bounds(p, mask)?;
+        let Root::Buf {
+            g,
+            konst,
+            dynamic: Some(d),
+            stride,
+        } = p.root.clone()
+        else {
+            return self.scatter(p, value, &mask);
+        };
+        let Some(plan) = self.wide_plan(p, stride) else {
+            return self.scatter(p, value, &mask);
+        };
+        let (first, d0) = self.first_lane(&mask, &d);
+        let (ok, base0) = self.consecutive(&d, &first, &d0, stride, &mask);
+        let (wide, scattered, join) = (self.label(), self.label(), self.label());
+        self.line(&format!("br i1 {ok}, label %{wide}, label %{scattered}"));
+        self.body.push_str(&format!("{wide}:\n"));
+        self.wide_store(&WideAt { g, konst, base0 }, &plan, &mask, value)?;
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{scattered}:\n"));
+        self.scatter(p, value, &mask)?;
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{join}:\n"));
+        Ok(())
+    }
+
+    /// Stores each scalar leaf with a masked scatter.
+    fn scatter(&mut self, p: &Place, value: &Val, mask: &str) -> Lowering<()> {
         for (path, s, ptrs) in self.leaf_pointers(p)? {
             let v = lanes(&s);
-            let x = if path.is_empty() {
-                value.v()?.to_string()
-            } else {
-                let at: Vec<String> = path.iter().map(|c| c.to_string()).collect();
-                self.op(&format!(
-                    "extractvalue {}, {}",
-                    value.typed()?,
-                    at.join(", ")
-                ))
-            };
+            let x = self.leaf_of(value, &path)?;
             let sfx = intrinsic_suffix(&s);
             self.declare(&format!(
                 "declare void @llvm.masked.scatter.v{w}{sfx}.v{w}p0({v}, {}, i32, {})",
