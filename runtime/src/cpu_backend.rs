@@ -141,21 +141,20 @@ impl CpuDevice {
         })
     }
 
-    /// The vector form of a compiled kernel for a dispatch of `invocations`, when it has
-    /// one and this device runs them (see `cpu::simd::compiled`: a kernel with a host form
-    /// runs that until its vector form is ready; others wait for it).
+    /// Whether a compiled kernel's vector form is ready for this device (see
+    /// `cpu::simd::compiled`: a kernel with a host form runs that until its vector form is
+    /// ready; others wait for it).
     fn simd_form(
         &self,
         code: &Option<Arc<cohort_compiler::CompiledKernel>>,
         has_host: bool,
-        invocations: u64,
-    ) -> Option<cpu::simd::SimdKernel> {
+    ) -> cpu::simd::Ready {
         match code {
             Some(k) if self.forms != cpu::simd::Forms::Host => {
                 let wait = self.forms == cpu::simd::Forms::Vector || !has_host;
-                cpu::simd::compiled(k, wait, invocations)
+                cpu::simd::compiled(k, wait)
             }
-            _ => None,
+            _ => cpu::simd::Ready::Never,
         }
     }
 
@@ -239,7 +238,11 @@ impl CpuDevice {
             return Ok(());
         }
         let invocations = total * u64::from(cmd.workgroup_size);
-        let simd = self.simd_form(&cmd.code, cmd.host.is_some(), invocations);
+        let ready = self.simd_form(&cmd.code, cmd.host.is_some());
+        let simd = match ready {
+            cpu::simd::Ready::Vector(k) => Some(k),
+            _ => None,
+        };
         let vector = match (simd, cmd.host) {
             (Some(_), None) => true,
             (Some(_), Some(_)) => {
@@ -253,9 +256,15 @@ impl CpuDevice {
             (_, _, Some(h)) => run_host(cmd, h, groups, total),
             _ => unreachable!("record_cmd keeps a command only with a form to run"),
         };
-        if simd.is_some() && cmd.host.is_some() && ran.is_ok() {
+        if ran.is_ok() {
             let ns = start.elapsed().as_nanos() as u64;
-            self.chooser.record(&cmd.name, vector, ns, invocations);
+            match (ready, &cmd.code) {
+                (cpu::simd::Ready::Vector(_), _) if cmd.host.is_some() => {
+                    self.chooser.record(&cmd.name, vector, ns, invocations)
+                }
+                (cpu::simd::Ready::NotYet, Some(k)) => cpu::simd::ran_host(k, ns),
+                _ => {}
+            }
         }
         ran
     }
@@ -353,7 +362,7 @@ impl Backend for CpuDevice {
 
     /// Starts compiling the kernel's vector form (the host form is part of the program).
     fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
-        self.simd_form(&compiled_code(kernel), kernel.host.is_some(), 0);
+        self.simd_form(&compiled_code(kernel), kernel.host.is_some());
         Ok(())
     }
 
@@ -378,7 +387,9 @@ impl Records for CpuDevice {
         dispatch: &Dispatch<'_>,
     ) -> Result<Cmd> {
         let code = compiled_code(kernel);
-        if kernel.host.is_none() && self.simd_form(&code, false, 0).is_none() {
+        if kernel.host.is_none()
+            && !matches!(self.simd_form(&code, false), cpu::simd::Ready::Vector(_))
+        {
             return Err(RuntimeError::MissingFeature {
                 kernel: kernel.name.clone(),
                 backend: BackendKind::Cpu,

@@ -8,6 +8,7 @@
 
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 use libloading::Library;
 
@@ -213,6 +214,11 @@ impl Jit {
         }
     }
 
+    /// The cache key of the object compiled from `ir`: the IR, the library and the CPU.
+    pub fn key(&self, ir: &str) -> u64 {
+        crate::hash64(self.target_key, ir.as_bytes())
+    }
+
     /// Which library this JIT runs on.
     pub fn library(&self) -> &str {
         &self.api.name
@@ -221,7 +227,7 @@ impl Jit {
     /// The entry address of a kernel's vector form if it is linked already or its object
     /// file is in the cache (then it is linked now); `None` if it must be compiled.
     pub fn cached(&self, ir: &str, entry: &str) -> Option<Result<usize, String>> {
-        let key = crate::hash64(self.target_key, ir.as_bytes());
+        let key = self.key(ir);
         if let Some(&addr) = self.lock_linker().linked.get(&key) {
             return Some(Ok(addr));
         }
@@ -231,23 +237,28 @@ impl Jit {
 
     /// Compiles the IR of a kernel's vector form, whose entry function is named `entry`
     /// (or takes its object file from the cache), links it and returns the entry's
-    /// address. The same IR is linked once per process.
-    pub fn compile(&self, ir: &str, entry: &str) -> Result<usize, String> {
+    /// address and the time LLVM took (zero from the cache). The same IR is linked once
+    /// per process.
+    pub fn compile(&self, ir: &str, entry: &str) -> Result<(usize, Duration), String> {
         if let Some(r) = self.cached(ir, entry) {
-            return r;
+            return r.map(|a| (a, Duration::ZERO));
         }
-        let key = crate::hash64(self.target_key, ir.as_bytes());
+        let key = self.key(ir);
         let ir = ir.replacen(
             &format!("@{entry}("),
             &format!("@{}(", symbol(entry, key)),
             1,
         );
-        let object = {
+        let (object, took) = {
             let _one = self.compiling.lock().unwrap_or_else(|e| e.into_inner());
-            self.object(&ir)?
+            let start = Instant::now();
+            (self.object(&ir)?, start.elapsed())
         };
         crate::disk_cache::save(&object_file(key), &object);
-        self.link(key, entry, &object)
+        if let Some(p) = host_time_file(key) {
+            let _ = std::fs::remove_file(p);
+        }
+        self.link(key, entry, &object).map(|a| (a, took))
     }
 
     fn lock_linker(&self) -> std::sync::MutexGuard<'_, Linker> {
@@ -345,6 +356,25 @@ fn symbol(entry: &str, key: u64) -> String {
 /// Where the object file of the IR with key `key` is cached.
 fn object_file(key: u64) -> Option<std::path::PathBuf> {
     crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.o")))
+}
+
+/// Where the time a kernel's host form has run on this machine, over runs, is kept until
+/// its vector form (the object with key `key`) is compiled.
+fn host_time_file(key: u64) -> Option<std::path::PathBuf> {
+    crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.host-ns")))
+}
+
+/// The time, in nanoseconds, recorded by [`save_host_time`] (0 if none).
+pub fn host_time(key: u64) -> u64 {
+    host_time_file(key)
+        .and_then(|p| std::fs::read(p).ok())
+        .and_then(|b| b.try_into().ok())
+        .map_or(0, u64::from_le_bytes)
+}
+
+/// Keeps the time a kernel's host form has run on this machine.
+pub fn save_host_time(key: u64, ns: u64) {
+    crate::disk_cache::save(&host_time_file(key), &ns.to_le_bytes());
 }
 
 /// The process's JIT, opened on first use (`Err` once, with the reason, where there is no

@@ -2,7 +2,8 @@
 //! `W` invocations per call in SIMD lanes (`lower`), compiled at run time by a libLLVM
 //! found on the machine (`llvm`). Kernels it does not cover, and machines without a
 //! libLLVM, keep the host form; where a kernel has both, `choice` picks one.
-//! `COHORT_CPU_SIMD_LOG=1` says which form each kernel runs and why.
+//! `COHORT_CPU_SIMD_LOG=1` says which form each kernel runs and why;
+//! `COHORT_CPU_SIMD_DUMP=DIR` writes each kernel's IR to `DIR/<kernel>.ll`.
 
 mod choice;
 mod expr;
@@ -83,16 +84,21 @@ pub fn lower_to_llvm_ir(k: &CompiledKernel) -> Result<String, String> {
     lower::lower(k, lower::RUN)
 }
 
-/// Invocations a kernel runs in its host form before its vector form is compiled (about a
-/// tenth of a second of work on one core): short runs, such as tests and thumbnails, never
-/// wait for LLVM; anything longer compiles once per machine (objects are cached on disk)
-/// and loads the object from then on.
-pub const HOT_INVOCATIONS: u64 = 1 << 20;
+/// What LLVM is assumed to take per byte of IR before this process has compiled anything
+/// (`COHORT_CPU_SIMD_LOG=1` prints each compile's rate: 0.4-1.6 us per byte at -O2
+/// on the 2-core machine of BENCHMARKS.md).
+const DEFAULT_NS_PER_IR_BYTE: f64 = 1000.0;
 
-/// A kernel's vector form: not compiled (with the invocations its host form has run),
-/// being compiled, or compiled (or refused, with the reason).
+/// A kernel's vector form: not compiled (its IR, its object cache key, and the time its
+/// host form has run on this machine, over runs, with what of that is on disk), being
+/// compiled, or compiled (or refused, with the reason).
 enum State {
-    Cold(u64),
+    Cold {
+        ir: Arc<str>,
+        key: u64,
+        host_ns: u64,
+        saved_ns: u64,
+    },
     Pending,
     Done(Result<SimdKernel, String>),
 }
@@ -100,6 +106,8 @@ enum State {
 struct Cache {
     kernels: Mutex<HashMap<u64, State>>,
     done: Condvar,
+    /// Running estimate of LLVM's nanoseconds per byte of IR, from this process's compiles.
+    ns_per_byte: Mutex<f64>,
 }
 
 fn cache() -> &'static Cache {
@@ -107,54 +115,124 @@ fn cache() -> &'static Cache {
     CACHE.get_or_init(|| Cache {
         kernels: Mutex::new(HashMap::new()),
         done: Condvar::new(),
+        ns_per_byte: Mutex::new(DEFAULT_NS_PER_IR_BYTE),
     })
 }
 
-/// The vector form of `k` for a dispatch of `invocations`, or `None` where it has none
-/// yet. The first call links it if its object file is cached. Otherwise it is compiled,
-/// on a thread of its own, once the kernel has run `HOT_INVOCATIONS` (at once with
-/// `wait`); until then `wait: false` returns `None` (the backend runs the host form, so
-/// that LLVM's time never delays a dispatch) and `wait: true` waits for it.
-pub fn compiled(k: &Arc<CompiledKernel>, wait: bool, invocations: u64) -> Option<SimdKernel> {
+/// Which form a dispatch of a kernel can run.
+#[derive(Clone, Copy, Debug)]
+pub enum Ready {
+    /// Its vector form.
+    Vector(SimdKernel),
+    /// Its host form, for now: report the time it takes ([`ran_host`]), which decides
+    /// when the vector form is compiled.
+    NotYet,
+    /// Its host form, always (no vector form: the reason was logged).
+    Never,
+}
+
+/// The vector form of `k`, if it has one yet. The first call links it if its object file
+/// is cached. Otherwise it is compiled on a thread of its own once the kernel's host form
+/// has run as long as the compile is estimated to take (from the IR's size), counted over
+/// runs on this machine (the time is kept beside the object cache): a kernel that runs
+/// little never pays LLVM more than its host form took, and one that runs often compiles
+/// once per machine. With `wait` it is compiled at once and waited for.
+pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Ready {
     let c = cache();
     let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
     if !kernels.contains_key(&k.id) {
         drop(kernels);
-        let first = match probe(k) {
-            Some(r) => State::Done(r),
-            None => State::Cold(0),
-        };
+        let first = probe(k);
         kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
         kernels.entry(k.id).or_insert(first);
     }
-    if let Some(State::Cold(n)) = kernels.get_mut(&k.id) {
-        *n += invocations;
-        if wait || *n >= HOT_INVOCATIONS {
-            kernels.insert(k.id, State::Pending);
-            spawn_build(Arc::clone(k));
-        }
+    if wait {
+        start_if_cold(&mut kernels, k);
     }
     loop {
         match kernels.get(&k.id) {
-            Some(State::Done(r)) => return r.as_ref().ok().copied(),
-            _ if !wait => return None,
+            Some(State::Done(Ok(v))) => return Ready::Vector(*v),
+            Some(State::Done(Err(_))) => return Ready::Never,
+            _ if !wait => return Ready::NotYet,
             _ => kernels = c.done.wait(kernels).unwrap_or_else(|e| e.into_inner()),
         }
     }
 }
 
-/// The vector form of `k` without compiling: linked from the object cache, or refused
-/// (no libLLVM, or a construct the lowering does not cover); `None`: it must be compiled.
-fn probe(k: &CompiledKernel) -> Option<Result<SimdKernel, String>> {
+/// Records `ns` more of `k`'s host form (after [`Ready::NotYet`]); starts compiling its
+/// vector form once that time, over runs, reaches the compile's estimate, and keeps it on
+/// disk at every eighth of the estimate.
+pub fn ran_host(k: &Arc<CompiledKernel>, ns: u64) {
+    let c = cache();
+    let per_byte = *c.ns_per_byte.lock().unwrap_or_else(|e| e.into_inner());
+    let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(State::Cold {
+        ir,
+        key,
+        host_ns,
+        saved_ns,
+    }) = kernels.get_mut(&k.id)
+    {
+        *host_ns += ns;
+        let estimate = per_byte * ir.len() as f64;
+        if *host_ns as f64 >= estimate {
+            if log() {
+                eprintln!(
+                    "cohort: `{}`: its host form has run {:.2} s on this machine, its vector form's compile is estimated at {:.2} s: compiling",
+                    k.name,
+                    *host_ns as f64 * 1e-9,
+                    estimate * 1e-9
+                );
+            }
+            start_if_cold(&mut kernels, k);
+        } else if (*host_ns - *saved_ns) as f64 >= estimate / 8.0 {
+            *saved_ns = *host_ns;
+            llvm::save_host_time(*key, *host_ns);
+        }
+    }
+}
+
+fn start_if_cold(kernels: &mut HashMap<u64, State>, k: &Arc<CompiledKernel>) {
+    if let Some(State::Cold { ir, .. }) = kernels.get(&k.id) {
+        let ir = Arc::clone(ir);
+        kernels.insert(k.id, State::Pending);
+        spawn_build(Arc::clone(k), ir);
+    }
+}
+
+/// The vector form of `k` without compiling: linked from the object cache, refused (no
+/// libLLVM, or a construct the lowering does not cover), or `Cold` with its IR.
+fn probe(k: &CompiledKernel) -> State {
     let jit = match llvm::jit() {
         Ok(j) => j,
-        Err(e) => return Some(Err(e.clone())),
+        Err(e) => return State::Done(Err(e.clone())),
     };
-    let ir = match lower::lower(k, lower::RUN) {
-        Ok(ir) => ir,
-        Err(e) => return Some(Err(e)),
+    let ir: Arc<str> = match lower::lower(k, lower::RUN) {
+        Ok(ir) => ir.into(),
+        Err(e) => {
+            if log() {
+                eprintln!("cohort: `{}` has no vector form: {e}", k.name);
+            }
+            return State::Done(Err(e));
+        }
     };
-    let r = jit.cached(&ir, lower::RUN)?.map(entry);
+    if let Some(d) = std::env::var_os("COHORT_CPU_SIMD_DUMP") {
+        let _ = std::fs::write(
+            std::path::Path::new(&d).join(format!("{}.ll", k.name)),
+            &*ir,
+        );
+    }
+    let key = jit.key(&ir);
+    let Some(r) = jit.cached(&ir, lower::RUN) else {
+        let host_ns = llvm::host_time(key);
+        return State::Cold {
+            ir,
+            key,
+            host_ns,
+            saved_ns: host_ns,
+        };
+    };
+    let r = r.map(entry);
     if log() {
         if let Ok(v) = &r {
             eprintln!(
@@ -163,42 +241,50 @@ fn probe(k: &CompiledKernel) -> Option<Result<SimdKernel, String>> {
             );
         }
     }
-    Some(r)
+    State::Done(r)
 }
 
-fn spawn_build(k: Arc<CompiledKernel>) {
+fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
     std::thread::spawn(move || {
-        let start = std::time::Instant::now();
-        let r = build(&k);
+        let r = build(&k, &ir);
+        let took = r.as_ref().map_or(std::time::Duration::ZERO, |b| b.1);
+        let r = r.map(|b| b.0);
+        let c = cache();
+        if !took.is_zero() {
+            // The estimate follows this machine and library: half old, half new.
+            let mut rate = c.ns_per_byte.lock().unwrap_or_else(|e| e.into_inner());
+            *rate = 0.5 * *rate + 0.5 * took.as_nanos() as f64 / ir.len().max(1) as f64;
+        }
         if log() {
             match &r {
                 Ok(v) => eprintln!(
-                    "cohort: `{}` has a vector form (compiled in {:.3} s, entry at {:p})",
+                    "cohort: `{}` has a vector form (compiled in {:.3} s, {} bytes of IR, {:.0} ns per byte; entry at {:p})",
                     k.name,
-                    start.elapsed().as_secs_f64(),
+                    took.as_secs_f64(),
+                    ir.len(),
+                    took.as_nanos() as f64 / ir.len().max(1) as f64,
                     v.run as *const ()
                 ),
                 Err(e) => eprintln!("cohort: `{}` has no vector form: {e}", k.name),
             }
         }
-        let c = cache();
         let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
         kernels.insert(k.id, State::Done(r));
         c.done.notify_all();
     });
 }
 
-fn build(k: &CompiledKernel) -> Result<SimdKernel, String> {
+/// Compiles (or links from the cache) `k`'s vector form from its IR; with LLVM's time.
+fn build(k: &CompiledKernel, ir: &str) -> Result<(SimdKernel, std::time::Duration), String> {
     let jit = llvm::jit().as_ref().map_err(Clone::clone)?;
-    let ir = lower::lower(k, lower::RUN)?;
-    let addr = jit.compile(&ir, lower::RUN).map_err(|e| {
+    let (addr, took) = jit.compile(ir, lower::RUN).map_err(|e| {
         // The lowering wrote IR that LLVM refuses: a bug of this backend, not the kernel's.
         format!(
             "{e} (a Cohort CPU backend bug, kernel `{}` at {})",
             k.name, k.location
         )
     })?;
-    Ok(entry(addr))
+    Ok((entry(addr), took))
 }
 
 fn entry(addr: usize) -> SimdKernel {
