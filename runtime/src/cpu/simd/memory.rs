@@ -51,6 +51,17 @@ pub struct WideAt {
     base0: String,
 }
 
+impl Root {
+    /// A local place one index deeper (a buffer place is unchanged: its indices are
+    /// offsets, added by the caller).
+    fn push(mut self, i: Idx) -> Root {
+        if let Root::Local { path, .. } = &mut self {
+            path.push(i);
+        }
+        self
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Place {
     pub root: Root,
@@ -123,21 +134,10 @@ impl Fx<'_> {
             ref other => return Err(format!("indexing a {other:?}")),
         };
         let root = match p.root {
-            Root::Local {
-                slot,
-                slot_ty,
-                mut path,
-            } => {
-                path.push(Idx::Dyn(
-                    index.v()?.to_string(),
-                    len.ok_or("a runtime-sized local")?,
-                ));
-                Root::Local {
-                    slot,
-                    slot_ty,
-                    path,
-                }
-            }
+            local @ Root::Local { .. } => local.push(Idx::Dyn(
+                index.v()?.to_string(),
+                len.ok_or("a runtime-sized local")?,
+            )),
             Root::Buf {
                 g, konst, dynamic, ..
             } => {
@@ -183,18 +183,7 @@ impl Fx<'_> {
             ref other => return Err(format!("a member of a {other:?}")),
         };
         let root = match p.root {
-            Root::Local {
-                slot,
-                slot_ty,
-                mut path,
-            } => {
-                path.push(Idx::Const(index));
-                Root::Local {
-                    slot,
-                    slot_ty,
-                    path,
-                }
-            }
+            local @ Root::Local { .. } => local.push(Idx::Const(index)),
             Root::Buf {
                 g,
                 konst,
