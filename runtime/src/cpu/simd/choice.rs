@@ -3,8 +3,8 @@
 //! everything they load), and which one wins depends on the scene as much as on the kernel.
 //! So by default the backend measures: each form runs one of a kernel's first dispatches,
 //! then the one with less time per invocation (a running average) runs the kernel, and one
-//! dispatch in 16 runs the other to keep its average current. Both forms compute the same
-//! bits, so the choice changes only speed.
+//! dispatch in 16 (fewer where the other is much slower) runs the other to keep its average
+//! current. Both forms compute the same bits, so the choice changes only speed.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -32,9 +32,18 @@ impl Forms {
     }
 }
 
-/// One dispatch in this many runs the form that is currently slower, so that its estimate
-/// follows the workload (a render's first bounces are coherent, its later ones are not).
+/// At most one dispatch in this many runs the form that is currently slower, so that its
+/// estimate follows the workload (a render's first bounces are coherent, its later ones
+/// are not).
 const EXPLORE_EVERY: u64 = 16;
+
+/// Where the slower form is much slower, it runs more rarely: so that running it costs at
+/// most this share of the kernel's time. A fixed one in 16 cost `extend` on the README's
+/// scene 9 % (its host form takes 2-2.4x its vector form's time).
+const EXPLORE_COST: f64 = 0.02;
+
+/// The rarest exploring dispatch: one in this many.
+const EXPLORE_MAX: u64 = 256;
 
 /// Weight of a new timing in a form's running estimate.
 const WEIGHT: f64 = 0.25;
@@ -55,6 +64,21 @@ impl Trial {
             _ => None,
         }
     }
+
+    /// One dispatch in this many runs the slower form: the running cost of doing so,
+    /// (slower / faster - 1) / interval, stays within `EXPLORE_COST`.
+    fn explore_every(&self) -> u64 {
+        let [Some(v), Some(h)] = self.estimate else {
+            return EXPLORE_EVERY;
+        };
+        let ratio = v.max(h) / v.min(h).max(f64::MIN_POSITIVE);
+        let every = ((ratio - 1.0) / EXPLORE_COST).ceil();
+        if every.is_finite() {
+            (every as u64).clamp(EXPLORE_EVERY, EXPLORE_MAX)
+        } else {
+            EXPLORE_MAX
+        }
+    }
 }
 
 /// The measured choices of one device, by kernel name.
@@ -65,7 +89,8 @@ pub struct Chooser {
 
 impl Chooser {
     /// Whether the next dispatch of `kernel` runs its vector form: each form until it has
-    /// an estimate, then the faster one, and every `EXPLORE_EVERY`-th dispatch the other.
+    /// an estimate, then the faster one, and every [`Trial::explore_every`]-th dispatch
+    /// the other.
     pub fn vector_next(&self, kernel: &str) -> bool {
         let t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
         let Some(tr) = t.get(kernel) else {
@@ -74,7 +99,10 @@ impl Chooser {
         match (tr.estimate, tr.vector_faster()) {
             ([None, _], _) => true,
             ([_, None], _) => false,
-            (_, Some(v)) => v != (tr.dispatches % EXPLORE_EVERY == EXPLORE_EVERY - 1),
+            (_, Some(v)) => {
+                let every = tr.explore_every();
+                v != (tr.dispatches % every == every - 1)
+            }
             (_, None) => true,
         }
     }
@@ -100,5 +128,47 @@ impl Chooser {
                 );
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trial(vector_ns: f64, host_ns: f64) -> Trial {
+        Trial {
+            estimate: [Some(vector_ns), Some(host_ns)],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_much_slower_form_is_explored_rarely() {
+        // Near-even forms: one in 16, the most often.
+        assert_eq!(trial(100.0, 105.0).explore_every(), EXPLORE_EVERY);
+        // 2.4x slower: (2.4 - 1) / 0.02 = 70.
+        assert_eq!(trial(100.0, 240.0).explore_every(), 70);
+        assert_eq!(trial(240.0, 100.0).explore_every(), 70);
+        // Far slower, or a zero estimate: the rarest.
+        assert_eq!(trial(1.0, 1000.0).explore_every(), EXPLORE_MAX);
+        assert_eq!(trial(0.0, 10.0).explore_every(), EXPLORE_MAX);
+    }
+
+    #[test]
+    fn the_faster_form_runs_and_the_slower_one_is_explored() {
+        let c = Chooser::default();
+        // First dispatch: vector (no estimate), second: host (no host estimate).
+        assert!(c.vector_next("k"));
+        c.record("k", true, 100, 1);
+        assert!(!c.vector_next("k"));
+        c.record("k", false, 240, 1);
+        // Vector is 2.4x faster: it runs, except once in 70 dispatches.
+        let mut host_runs = 0;
+        for _ in 0..700 {
+            let v = c.vector_next("k");
+            host_runs += usize::from(!v);
+            c.record("k", v, if v { 100 } else { 240 }, 1);
+        }
+        assert_eq!(host_runs, 10);
     }
 }
