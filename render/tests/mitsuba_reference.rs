@@ -19,7 +19,6 @@
 
 use std::path::PathBuf;
 
-use cohort::runtime::cpu::simd::Forms;
 use cohort::runtime::{BackendKind, Device};
 use cohort_render::input::read_exr;
 use cohort_render::{Budget, Image, IntegratorKind, RenderOptions, Renderer, Roulette};
@@ -156,14 +155,6 @@ fn check(name: &str) {
 /// budget and is tested as the CPU backend is.
 const SOFTWARE_DRIVER_PATHS: u32 = 32;
 
-/// The CPU backend with its host forms. This test checks the renderer's estimates, which
-/// both CPU forms compute bit for bit (the suites' difftests check that). Each of its 45
-/// scenes builds its own shading kernel, and compiling their vector forms cost CI's two
-/// cores 150-210 s of this test (475-533 s against 320 s, BENCHMARKS.md).
-fn cpu_device() -> Device {
-    Device::cpu_with(Forms::Host).expect("the CPU backend always opens")
-}
-
 /// Paths per pixel of the z-tested image on a `w` x `h` image.
 fn paths_per_pixel(w: u32, h: u32) -> u32 {
     (sample_budget() / (w * h)).max(1)
@@ -249,7 +240,7 @@ fn verdicts(
     let (w, h) = (reference.image.width, reference.image.height);
     assert_eq!((scene.camera.width, scene.camera.height), (w, h));
     let mut out = Vec::new();
-    let cpu = Some(cpu_device());
+    let cpu = Device::for_tests(BackendKind::Cpu);
     for kind in [BackendKind::Wgpu, BackendKind::Vulkan, BackendKind::Cpu] {
         let device = match kind {
             BackendKind::Cpu => cpu.clone(),
@@ -629,7 +620,7 @@ fn blend_bsdf_delta_lobes_without_light_sampling() {
     let scene = cohort_scenes::load_mitsuba(&xml).unwrap().scene;
     let reference = read_exr(&scene_dir().join(format!("{name}.mean.exr"))).unwrap();
     let variance = read_exr(&scene_dir().join(format!("{name}.var.exr"))).unwrap();
-    let device = cpu_device();
+    let device = Device::for_tests(BackendKind::Cpu).expect("the CPU backend");
     let spp = paths_per_pixel(reference.image.width, reference.image.height);
     let image = render_by(&device, &scene, spp, IntegratorKind::Path);
     let v = z_test(
