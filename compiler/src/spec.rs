@@ -18,6 +18,9 @@ pub struct Target {
     /// Whether uniform parameters should be read-only storage buffers
     /// ([`Spec::uniforms_as_storage`]).
     pub uniforms_as_storage: bool,
+    /// Whether each invocation should compute its group's `group_share` value itself
+    /// ([`Spec::recompute_group_share`]).
+    pub recompute_group_share: bool,
 }
 
 /// The coherence group level: which invocations share a `group_share` value.
@@ -93,6 +96,14 @@ pub struct Spec {
     /// layout, bound as storage. For drivers where a uniform buffer costs more than its
     /// reads ([`Target::uniforms_as_storage`]).
     pub uniforms_as_storage: bool,
+    /// Every invocation computes its warp's or block's `group_share` value itself, from
+    /// its group index, instead of receiving the leader's through workgroup memory or a
+    /// subgroup broadcast. The value is the same bits (the closure reads only the group
+    /// index, uniform and specialised values, and constants), and no barrier is left. For
+    /// the CPU backend, whose vector form runs a group's invocations as blocks of SIMD
+    /// lanes and has no barrier; there the extra evaluations share the block's vector
+    /// instructions.
+    pub recompute_group_share: bool,
     /// The values of the kernel's `#[specialize]` parameters, in parameter order (the
     /// rest 0). They are literals in the built module, so that every branch they decide
     /// is left out of it (docs/LANGUAGE.md, "Specialisation constants").
@@ -117,6 +128,7 @@ impl Spec {
             warp_via_subgroup: false,
             required_subgroup_size: None,
             uniforms_as_storage: false,
+            recompute_group_share: false,
             constants: [0; MAX_CONSTANTS],
         }
     }
@@ -138,7 +150,12 @@ impl Spec {
     pub fn for_device(info: &KernelInfo, device: &Target, group: Group) -> Spec {
         let mut spec = Spec::portable(info, group);
         spec.uniforms_as_storage = device.uniforms_as_storage;
-        if group == Group::Warp {
+        spec.recompute_group_share =
+            device.recompute_group_share && matches!(group, Group::Warp | Group::Block(_));
+        // Subgroups serve `group_share` and `group_any` at warp level; a target that
+        // recomputes shares has no use for them there (its `group_any` keeps the portable
+        // lowering).
+        if group == Group::Warp && !spec.recompute_group_share {
             if device.subgroup_size == WARP && device.subgroup_size_min == device.subgroup_size_max
             {
                 spec.warp_via_subgroup = true;
@@ -157,7 +174,7 @@ impl Spec {
     /// Suffix that names this specialisation in artifact and snapshot names.
     pub fn suffix(&self) -> String {
         let mut s = self.group.label();
-        if self.group == Group::Warp {
+        if self.group == Group::Warp && !self.recompute_group_share {
             s.push_str(if self.warp_via_subgroup {
                 "_subgroup"
             } else {
@@ -169,6 +186,9 @@ impl Spec {
         }
         if self.uniforms_as_storage {
             s.push_str("_ustorage");
+        }
+        if self.recompute_group_share {
+            s.push_str("_recompute");
         }
         for (i, c) in self.constants.iter().enumerate() {
             if *c != 0 {

@@ -63,6 +63,9 @@ impl DeviceInfo {
             subgroup_size_max: self.subgroup_size_max,
             supports_required_subgroup_size: self.supports_required_subgroup_size,
             uniforms_as_storage: self.uniforms_as_storage,
+            // The CPU backend's vector form runs a group's invocations as SIMD blocks,
+            // without barriers (docs/LANGUAGE.md, section 13).
+            recompute_group_share: self.backend == BackendKind::Cpu,
         }
     }
 }

@@ -135,6 +135,8 @@ pub fn all() -> Vec<Variant> {
         Spec::portable(gp, Group::Block(256)),
         Spec::portable(gp, Group::Block(1024)),
         Spec::portable(gp, Group::Grid),
+        recompute_of(gp, Group::Warp),
+        recompute_of(gp, Group::Block(256)),
     ] {
         out.push(v(gp, "group_pick", spec, group_pick::group_pick::build));
     }
@@ -148,6 +150,13 @@ pub fn all() -> Vec<Variant> {
         out.push(v(gv, "group_vote", spec, group_vote::group_vote::build));
     }
     out
+}
+
+/// The CPU backend's specialisation: each invocation computes its group's value.
+fn recompute_of(info: &KernelInfo, group: Group) -> Spec {
+    let mut s = Spec::portable(info, group);
+    s.recompute_group_share = true;
+    s
 }
 
 fn warp_sg_of(info: &KernelInfo) -> Spec {

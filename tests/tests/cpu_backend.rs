@@ -7,6 +7,7 @@ mod common;
 
 use cohort::prelude::*;
 use cohort::runtime::{BackendKind, Device, RuntimeError};
+use cohort_tests::kernels::group_pick::{hash, PickParams};
 
 /// Even lanes sum 1 over the subgroup inside the `if` (only they are active there), every
 /// lane again after it (all reconverged), and odd lanes count the even lanes below them
@@ -280,5 +281,72 @@ fn a_vector_index_out_of_range_is_an_error_in_both_forms() {
             msg.contains("picks_a_component") && msg.contains("index out of bounds"),
             "{forms:?}: {msg}"
         );
+    }
+}
+
+/// A group's shared draw of a direction (trigonometry and a square root, as a coherent
+/// sampler's), written with the invocation's index beside it.
+#[kernel(workgroup = 64, group = Warp)]
+pub fn shared_direction(#[builtin(global_index)] gi: u32, p: &PickParams, out: &mut [Vec4]) {
+    let d = group_share(|group| {
+        let h = hash(p.seed ^ group);
+        let phi = (h >> 8) as f32 * (std::f32::consts::TAU / 16_777_216.0);
+        let z = (h & 0xff) as f32 / 127.5 - 1.0;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    });
+    let i = gi as usize;
+    if i < p.n as usize {
+        out[i] = d.extend(gi as f32);
+    }
+}
+
+/// At warp and block level the CPU backend's kernels compute each group's shared value in
+/// every invocation (`Spec::recompute_group_share`), so they have a vector form, and both
+/// CPU forms give the host run's bits: one value per group, the leader's.
+#[test]
+fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
+    use cohort::runtime::cpu::simd::{lower_to_llvm_ir, Forms};
+    use cohort::Group;
+    let n = 1000u32;
+    let p = PickParams { seed: 0x5eed, n };
+    for group in [Group::Warp, Group::Block(64), Group::Block(256)] {
+        let mut want = vec![Vec4::ZERO; n as usize];
+        let wg = match group {
+            Group::Block(b) => b,
+            _ => 64,
+        };
+        cohort::host::for_each_invocation(n, wg, group, |inv| {
+            shared_direction(inv.global_index, &p, &mut want)
+        });
+        let groups: std::collections::HashSet<_> = want
+            .iter()
+            .map(|v| v.truncate().to_array().map(f32::to_bits))
+            .collect();
+        let per = match group {
+            Group::Block(b) => b,
+            _ => 32,
+        };
+        assert_eq!(groups.len(), n.div_ceil(per) as usize, "{group:?}");
+        for forms in [Forms::Host, Forms::Vector] {
+            let d = Device::cpu_with(forms).unwrap();
+            let spec = shared_direction::spec(&d, Some(group));
+            assert!(spec.recompute_group_share, "{group:?}");
+            let compiled = cohort::compiler::compile(
+                &shared_direction::build(&spec),
+                "shared_direction".into(),
+            )
+            .unwrap();
+            if let Err(e) = lower_to_llvm_ir(&compiled) {
+                panic!("{group:?}: no vector form: {e}");
+            }
+            let out = d.upload(&vec![Vec4::splat(-1.0); n as usize]).unwrap();
+            shared_direction::launch_spec(&d, &spec, n, &p, &out).unwrap();
+            let got = d.read(&out).unwrap();
+            let bits = |v: &[Vec4]| -> Vec<[u32; 4]> {
+                v.iter().map(|x| x.to_array().map(f32::to_bits)).collect()
+            };
+            assert_eq!(bits(&got), bits(&want), "{group:?}, {forms:?}");
+        }
     }
 }

@@ -290,3 +290,28 @@ fn renderer_kernels_have_a_vector_form() {
     }
     assert!(lowered >= 8, "only {lowered} renderer kernels lowered");
 }
+
+/// The paper's coherent configurations (warp and block groups, group draws, per-path or
+/// group roulette) shade in the vector form too: at the CPU backend's specialisation each
+/// invocation computes its group's draws, so `extend` keeps no barrier. Whole-group ends
+/// (`group_any`) still wait for each other, and keep the host form.
+#[test]
+fn coherent_shading_has_a_vector_form_on_the_cpu() {
+    use cohort::Group;
+    use cohort_kernels::extend::extend;
+    use cohort_kernels::integrator::NextEvent;
+    use cohort_kernels::path_end::EachPath;
+    use cohort_kernels::sampling::CoherentCosine;
+    use cohort_kernels::shading::{SHADES_ALL, SHADES_GROUP_DRAWS};
+    let cpu = cohort::runtime::Device::cpu_with(cohort::runtime::cpu::simd::Forms::Host).unwrap();
+    for group in [Group::Warp, Group::Block(256)] {
+        let spec =
+            extend::spec(&cpu, Some(group)).with_constants(&[SHADES_ALL | SHADES_GROUP_DRAWS]);
+        assert!(spec.recompute_group_share, "{group:?}");
+        let built = extend::build::<CoherentCosine, EachPath, NextEvent>(&spec);
+        let compiled = cohort::compiler::compile(&built, format!("extend {group:?}")).unwrap();
+        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+            panic!("{group:?}: no vector form: {e}");
+        }
+    }
+}

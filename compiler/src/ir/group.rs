@@ -6,6 +6,9 @@
 //! - `Warp`: lane 0 of each 32-invocation warp computes it; a subgroup broadcast shares
 //!   it where subgroups are 32 wide, workgroup memory and a barrier elsewhere;
 //! - `Block(n)`: invocation 0 of the workgroup computes it; workgroup memory + barrier;
+//! - `Warp` and `Block(n)` with `Spec::recompute_group_share`: each invocation computes
+//!   its group's value (group index = global index / 32, or the workgroup index), as the
+//!   leader would; no barrier;
 //! - `Grid`: every invocation computes it for group 0. The closure of a grid-level
 //!   value reads only uniform values (the front end checks it), so each computes the same
 //!   value, on the device: the host has no work between dispatches, and a batch of
@@ -47,6 +50,10 @@ pub fn group_share<T: GpuType>(leader: impl FnOnce(Val<u32>) -> Val<T>) -> Val<T
     match spec.group {
         Group::Thread => leader(global),
         Group::Grid => leader(lit(0u32)),
+        Group::Block(_) if spec.recompute_group_share => leader(Val::<u32>::from_handle(
+            pro.workgroup_linear.expect("prologue"),
+        )),
+        Group::Warp if spec.recompute_group_share => leader(global / lit(WARP)),
         Group::Block(_) => {
             let ty = with(|c| T::naga_type(&mut c.module));
             let g = add_global(
