@@ -350,3 +350,83 @@ fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
         }
     }
 }
+
+/// Transcendentals of `xs[gi / 8]` (every lane of a vector block alike, as a group's
+/// shared draw is at warp and block level) and of `xs[gi]` (lanes apart), side by side.
+#[kernel(workgroup = 64)]
+pub fn transcendentals(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
+    let i = gi as usize;
+    let k = i / 8;
+    let x = if i % 16 < 8 { xs[k] } else { xs[i] };
+    let y = xs[(k + 1) % xs.len()];
+    let a = x.sin() + x.cos() * 2.0;
+    let b = x.exp() + x.exp2() * 0.5 + x.abs().ln() + x.abs().log2() * 0.25;
+    let c = x.abs().powf(y) + x.tan() + x.atan() * 0.5 + x.atan2(y);
+    let d = x.acos() + x.asin() * 3.0;
+    out[i] = Vec4::new(a, b, c, d);
+}
+
+/// Every transcendental the vector form lowers (LLVM's intrinsics and libm calls, one per
+/// lane), over blocks of equal and of distinct arguments with edge values (NaN, the
+/// infinities, -0, subnormals, the extremes, past `exp`'s range), gives the host run's
+/// bits in both CPU forms.
+#[test]
+fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
+    use cohort::runtime::cpu::simd::Forms;
+    let mut xs = vec![
+        0.0f32,
+        -0.0,
+        1.0,
+        -1.0,
+        0.5,
+        -0.75,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE * 0.5,
+        f32::MAX,
+        f32::MIN,
+        88.7,
+        -103.9,
+        1.0e-20,
+        std::f32::consts::PI,
+        std::f32::consts::FRAC_PI_2,
+        100.0,
+        -0.3,
+    ];
+    let mut rng = common::Rng(0x1234_5678);
+    while xs.len() < 256 {
+        xs.push((rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 8.0);
+    }
+    let n = xs.len() as u32;
+    let mut want = vec![Vec4::ZERO; n as usize];
+    cohort::host::for_each_invocation(n, 64, cohort::Group::Thread, |inv| {
+        transcendentals(inv.global_index, &xs, &mut want)
+    });
+    // Bits, a NaN's sign and payload aside (unspecified, docs/LANGUAGE.md section 4).
+    let bits = |v: &[Vec4]| -> Vec<[u32; 4]> {
+        v.iter()
+            .map(|x| {
+                x.to_array()
+                    .map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() })
+            })
+            .collect()
+    };
+    for forms in [Forms::Host, Forms::Vector] {
+        let d = Device::cpu_with(forms).unwrap();
+        let xs_b = d.upload(&xs).unwrap();
+        let out = d.alloc::<Vec4>(n as usize).unwrap();
+        transcendentals::launch(&d, n, &xs_b, &out).unwrap();
+        let got = d.read(&out).unwrap();
+        if let Some(i) = (0..n as usize).find(|&i| bits(&got[i..=i]) != bits(&want[i..=i])) {
+            panic!(
+                "{forms:?}: invocation {i} (x = {}, y = {}): {:?} against the host's {:?}",
+                if i % 16 < 8 { xs[i / 8] } else { xs[i] },
+                xs[(i / 8 + 1) % xs.len()],
+                got[i],
+                want[i]
+            );
+        }
+    }
+}
