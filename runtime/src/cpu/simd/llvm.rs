@@ -252,7 +252,10 @@ impl Jit {
         let (object, took) = {
             let _one = self.compiling.lock().unwrap_or_else(|e| e.into_inner());
             let start = Instant::now();
-            (self.object(&ir)?, start.elapsed())
+            let object = self.object(&ir);
+            // SAFETY: `atexit` takes a plain C function (if it fails, exit runs without it).
+            unsafe { atexit(finish_compiles) };
+            (object?, start.elapsed())
         };
         crate::disk_cache::save(&object_file(key), &object);
         if let Some(p) = host_time_file(key) {
@@ -380,6 +383,31 @@ pub fn save_host_time(key: u64, ns: u64) {
 /// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
 /// usable libLLVM).
 pub fn jit() -> &'static Result<Jit, String> {
-    static JIT: std::sync::OnceLock<Result<Jit, String>> = std::sync::OnceLock::new();
     JIT.get_or_init(Jit::new)
+}
+
+static JIT: std::sync::OnceLock<Result<Jit, String>> = std::sync::OnceLock::new();
+
+extern "C" {
+    fn atexit(f: extern "C" fn()) -> i32;
+}
+
+/// Set by the first [`finish_compiles`] at exit.
+static EXITING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Registered at exit after every compile (exit runs handlers newest first): waits for a
+/// compile in flight, and keeps any other from starting, before the libLLVM's static
+/// objects are destroyed. Those created during a compile register their destructors then,
+/// so a handler registered when the JIT opened would run after them. A background
+/// compile still in LLVM while its statics were destroyed crashed the process after its
+/// work was done: a segfault, or an LLVM fatal error such as "Cannot select", in 1 of 48
+/// renders that compiled as they ended (2026-11-29). Only a process's first compile, before
+/// any handler, is left to that risk.
+extern "C" fn finish_compiles() {
+    if EXITING.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        return;
+    }
+    if let Some(Ok(j)) = JIT.get() {
+        std::mem::forget(j.compiling.lock().unwrap_or_else(|e| e.into_inner()));
+    }
 }
