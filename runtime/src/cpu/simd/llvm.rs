@@ -400,7 +400,7 @@ static EXITING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::n
 /// objects are destroyed. Those created during a compile register their destructors then,
 /// so a handler registered when the JIT opened would run after them. A background
 /// compile still in LLVM while its statics were destroyed crashed the process after its
-/// work was done: a segfault, or an LLVM fatal error such as "Cannot select", in 1 of 48
+/// work was done: a segfault, or an LLVM fatal error such as "Cannot select", in 2 of 128
 /// renders that compiled as they ended (2026-11-29). Only a process's first compile, before
 /// any handler, is left to that risk.
 extern "C" fn finish_compiles() {
