@@ -407,7 +407,22 @@ extern "C" fn finish_compiles() {
     if EXITING.swap(true, std::sync::atomic::Ordering::SeqCst) {
         return;
     }
-    if let Some(Ok(j)) = JIT.get() {
-        std::mem::forget(j.compiling.lock().unwrap_or_else(|e| e.into_inner()));
+    let Some(Ok(j)) = JIT.get() else { return };
+    // Bounded: a compile that never ends (LLVM broken under it by a static destroyed
+    // earlier, in a process's first compile) must not keep the process from exiting. A
+    // handler that waited without bound hung a render for 37 minutes.
+    let start = Instant::now();
+    while start.elapsed() < EXIT_WAIT {
+        match j.compiling.try_lock() {
+            Ok(g) => return std::mem::forget(g),
+            Err(std::sync::TryLockError::Poisoned(e)) => return std::mem::forget(e.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => {
+                std::thread::sleep(Duration::from_millis(1))
+            }
+        }
     }
 }
+
+/// How long exit waits for a compile in flight: several times the longest compile
+/// measured (0.75 s for the largest `extend` on two busy cores).
+const EXIT_WAIT: Duration = Duration::from_secs(5);
