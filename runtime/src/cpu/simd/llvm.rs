@@ -401,15 +401,16 @@ static EXITING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::n
 /// so a handler registered when the JIT opened would run after them. A background
 /// compile still in LLVM while its statics were destroyed crashed the process after its
 /// work was done: a segfault, or an LLVM fatal error such as "Cannot select", in 2 of 128
-/// renders that compiled as they ended (2026-11-29). Only a process's first compile, before
-/// any handler, is left to that risk.
+/// renders that compiled as they ended (2026-11-29). Still exposed: a compile in flight
+/// that creates statics no earlier compile did (a process's first compile among them),
+/// whose destructors run before this handler.
 extern "C" fn finish_compiles() {
     if EXITING.swap(true, std::sync::atomic::Ordering::SeqCst) {
         return;
     }
     let Some(Ok(j)) = JIT.get() else { return };
-    // Bounded: a compile that never ends (LLVM broken under it by a static destroyed
-    // earlier, in a process's first compile) must not keep the process from exiting. A
+    // Bounded: a compile that never ends (LLVM broken under it by a static it created,
+    // destroyed before this handler ran) must not keep the process from exiting. A
     // handler that waited without bound hung a render for 37 minutes.
     let start = Instant::now();
     while start.elapsed() < EXIT_WAIT {
