@@ -343,9 +343,6 @@ fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
             let out = d.upload(&vec![Vec4::splat(-1.0); n as usize]).unwrap();
             shared_direction::launch_spec(&d, &spec, n, &p, &out).unwrap();
             let got = d.read(&out).unwrap();
-            let bits = |v: &[Vec4]| -> Vec<[u32; 4]> {
-                v.iter().map(|x| x.to_array().map(f32::to_bits)).collect()
-            };
             assert_eq!(bits(&got), bits(&want), "{group:?}, {forms:?}");
         }
     }
@@ -404,15 +401,6 @@ fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
     cohort::host::for_each_invocation(n, 64, cohort::Group::Thread, |inv| {
         transcendentals(inv.global_index, &xs, &mut want)
     });
-    // Bits, a NaN's sign and payload aside (unspecified, docs/LANGUAGE.md section 4).
-    let bits = |v: &[Vec4]| -> Vec<[u32; 4]> {
-        v.iter()
-            .map(|x| {
-                x.to_array()
-                    .map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() })
-            })
-            .collect()
-    };
     for forms in [Forms::Host, Forms::Vector] {
         let d = Device::cpu_with(forms).unwrap();
         let xs_b = d.upload(&xs).unwrap();
@@ -429,4 +417,14 @@ fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
             );
         }
     }
+}
+
+/// The bits of `v`, a NaN's sign and payload aside (unspecified, docs/LANGUAGE.md section 4).
+fn bits(v: &[Vec4]) -> Vec<[u32; 4]> {
+    v.iter()
+        .map(|x| {
+            x.to_array()
+                .map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() })
+        })
+        .collect()
 }
