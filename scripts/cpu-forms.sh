@@ -17,7 +17,7 @@ BIN=$(realpath "$BIN")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%FT%TZ); commit $(git rev-parse --short HEAD)"
-# Renders run in the temporary folder: `cohort render` also writes render.png where it runs.
+# Renders run in the temporary folder (their PNGs go beside their EXRs there).
 [ -f "$SCENE" ] && SCENE=$(realpath "$SCENE")
 render() {
   (cd "$out" && COHORT_CPU_SIMD="$1" COHORT_CPU_SIMD_LOG=1 "$BIN" render --backend cpu --scene "$SCENE" \

@@ -123,9 +123,10 @@ struct RenderArgs {
     /// Linear EXR output.
     #[arg(long, default_value = "render.exr")]
     out: PathBuf,
-    /// Tone-mapped sRGB PNG output.
-    #[arg(long, default_value = "render.png")]
-    png: PathBuf,
+    /// Tone-mapped sRGB PNG output (default: beside the EXR, its name with `.png`: so
+    /// renders with different --out, shards among them, do not overwrite one PNG).
+    #[arg(long)]
+    png: Option<PathBuf>,
     /// Exposure of the PNG, in stops (negative: darker).
     #[arg(long, default_value_t = 0.0, value_parser = choices::finite, allow_negative_numbers = true)]
     exposure: f32,
@@ -253,6 +254,21 @@ fn load_scene(
 }
 
 impl RenderArgs {
+    /// Where the PNG goes: --png, else the EXR's path with the extension `.png`.
+    fn png_path(&self) -> Result<PathBuf, String> {
+        let png = self
+            .png
+            .clone()
+            .unwrap_or_else(|| self.out.with_extension("png"));
+        if png == self.out {
+            return Err(format!(
+                "--out and the PNG would both be written to {}: name the PNG with --png",
+                png.display()
+            ));
+        }
+        Ok(png)
+    }
+
     /// The configuration options, by name (shared with `cohort view`).
     fn config(&self) -> Config {
         Config {
@@ -357,7 +373,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
     // Every option is checked before anything is loaded or rendered, and so is where the
     // outputs go.
     a.check_before_scene(&configured)?;
-    for path in [Some(&a.out), Some(&a.png), a.stats.as_ref()]
+    let png_path = a.png_path()?;
+    for path in [Some(&a.out), Some(&png_path), a.stats.as_ref()]
         .into_iter()
         .flatten()
     {
@@ -502,7 +519,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
     // Both are written to temporary files first and put in place only when both were
     // written: a failure leaves both existing files as they were.
     let (exr, png) = std::thread::scope(|threads| {
-        let png = threads.spawn(|| output::stage_png(&a.png, &image, a.exposure));
+        let png = threads.spawn(|| output::stage_png(&png_path, &image, a.exposure));
         let exr = output::stage_exr(&a.out, &image, &attributes);
         (exr, png.join().expect("the PNG writer panicked"))
     });
@@ -639,7 +656,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
     println!(
         "wrote          {} and {} in {:.3} s",
         a.out.display(),
-        a.png.display(),
+        png_path.display(),
         written.as_secs_f64()
     );
     if let Some(path) = &a.stats {

@@ -22,6 +22,62 @@ fn lists_embedded_scenes() {
 }
 
 #[test]
+fn the_png_goes_beside_the_exr_unless_named() {
+    let dir = tempdir();
+    let render = |extra: &[&std::ffi::OsStr]| {
+        cohort()
+            .current_dir(&dir)
+            .args(["render", "--width", "8", "--height", "8", "--paths", "2"])
+            .args(["--backend", "cpu"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // Two shards with their own --out keep one PNG each, beside their EXRs.
+    std::fs::create_dir(dir.join("s")).unwrap();
+    for k in ["0", "1"] {
+        let exr = dir.join("s").join(format!("part{k}.exr"));
+        let shard = format!("{k}/2");
+        let out = render(&[
+            "--shard".as_ref(),
+            shard.as_ref(),
+            "--out".as_ref(),
+            exr.as_ref(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let png = std::fs::read(dir.join("s").join(format!("part{k}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+    assert!(
+        !dir.join("render.png").exists(),
+        "a PNG was written where the command ran"
+    );
+    // An --out that would be the PNG's name too is refused before anything renders.
+    let out = render(&["--out".as_ref(), "x.png".as_ref()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("x.png") && err.contains("--png"), "{err}");
+    assert!(!dir.join("x.png").exists());
+    // --png still names it.
+    let out = render(&[
+        "--out".as_ref(),
+        "x.png".as_ref(),
+        "--png".as_ref(),
+        "y.png".as_ref(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(&std::fs::read(dir.join("y.png")).unwrap()[1..4], b"PNG");
+}
+
+#[test]
 fn renders_and_writes_outputs() {
     if !has_gpu() {
         return;

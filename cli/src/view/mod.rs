@@ -147,7 +147,7 @@ pub fn run(a: ViewArgs) -> Result<(), String> {
         options: options.clone(),
         exposure: r.exposure,
         out: r.out.clone(),
-        png: r.png.clone(),
+        png: r.png_path()?,
     };
     let render_thread = {
         let (shared, proxy) = (shared.clone(), proxy.clone());
