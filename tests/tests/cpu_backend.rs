@@ -419,6 +419,75 @@ fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
     }
 }
 
+/// Integer quotients and remainders, unsigned and signed, by `bs[gi / 8]` (one divisor for
+/// a whole vector block, as `patch / m` in the coherent samplers) and by `bs[gi]`.
+#[kernel(workgroup = 64)]
+pub fn quotients(#[builtin(global_index)] gi: u32, xs: &[u32], bs: &[u32], out: &mut [UVec4]) {
+    let i = gi as usize;
+    let a = xs[i];
+    let b = if i % 16 < 8 { bs[i / 8] } else { bs[i] };
+    let sa = a as i32;
+    let sb = b as i32;
+    out[i] = UVec4::new(a / b, a % b, (sa / sb) as u32, (sa % sb) as u32);
+}
+
+/// The vector form divides in `f64` where the divisor is not a constant; its quotients and
+/// remainders are the host's exactly: at the extremes, by 0, `MIN / -1`, and at and around
+/// multiples of divisors of every magnitude (where a rounded quotient would show).
+#[test]
+fn integer_division_in_the_vector_form_is_exact() {
+    use cohort::runtime::cpu::simd::Forms;
+    let edges = [
+        0u32,
+        1,
+        2,
+        3,
+        7,
+        0x7fff_ffff,
+        0x8000_0000,
+        0x8000_0001,
+        u32::MAX - 1,
+        u32::MAX,
+    ];
+    let (mut xs, mut bs) = (Vec::new(), Vec::new());
+    for &a in &edges {
+        for &b in &edges {
+            xs.push(a);
+            bs.push(b);
+        }
+    }
+    let mut rng = common::Rng(0xd1d1);
+    while xs.len() < 8192 {
+        let b = (rng.next_u32() >> (rng.next_u32() % 32)).max(1);
+        let k = rng.next_u32() / b.max(1);
+        let m = k.wrapping_mul(b);
+        for a in [m, m.wrapping_sub(1), m.wrapping_add(b - 1), rng.next_u32()] {
+            xs.push(a);
+            bs.push(b);
+        }
+    }
+    let n = xs.len() as u32;
+    let mut want = vec![UVec4::ZERO; n as usize];
+    cohort::host::for_each_invocation(n, 64, cohort::Group::Thread, |inv| {
+        quotients(inv.global_index, &xs, &bs, &mut want)
+    });
+    let d = Device::cpu_with(Forms::Vector).unwrap();
+    let (x, b, out) = (
+        d.upload(&xs).unwrap(),
+        d.upload(&bs).unwrap(),
+        d.alloc::<UVec4>(n as usize).unwrap(),
+    );
+    quotients::launch(&d, n, &x, &b, &out).unwrap();
+    let got = d.read(&out).unwrap();
+    if let Some(i) = (0..n as usize).find(|&i| got[i] != want[i]) {
+        let b = if i % 16 < 8 { bs[i / 8] } else { bs[i] };
+        panic!(
+            "invocation {i}, {} by {b}: {} against the host's {}",
+            xs[i], got[i], want[i]
+        );
+    }
+}
+
 /// The bits of `v`, a NaN's sign and payload aside (unspecified, docs/LANGUAGE.md section 4).
 fn bits(v: &[Vec4]) -> Vec<[u32; 4]> {
     v.iter()
