@@ -77,6 +77,62 @@ fn the_png_goes_beside_the_exr_unless_named() {
     assert_eq!(&std::fs::read(dir.join("y.png")).unwrap()[1..4], b"PNG");
 }
 
+/// `COHORT_CPU_SIMD_PERF_MAP=1` names the vector forms of a render's kernels, at their
+/// code's address and size, in the map `perf` reads (`/tmp/perf-PID.map`).
+#[test]
+fn the_perf_map_names_the_vector_forms() {
+    if let Err(e) = cohort::runtime::cpu::simd::llvm_library() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true and no vector form: {e}"
+        );
+        return;
+    }
+    let dir = tempdir();
+    let child = cohort()
+        .current_dir(&dir)
+        .args(["render", "--width", "16", "--height", "16", "--paths", "1"])
+        .args(["--backend", "cpu"])
+        .env("COHORT_CPU_SIMD", "vector")
+        .env("COHORT_CPU_SIMD_PERF_MAP", "1")
+        .env("COHORT_CACHE_DIR", dir.join("cache"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let map = std::path::PathBuf::from(format!("/tmp/perf-{}.map", child.id()));
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&map).unwrap_or_default();
+    let _ = std::fs::remove_file(&map);
+    let entries: Vec<(u64, u64, &str)> = text
+        .lines()
+        .map(|l| {
+            let mut f = l.splitn(3, ' ');
+            let mut hex = || u64::from_str_radix(f.next().unwrap(), 16).unwrap();
+            let (addr, size) = (hex(), hex());
+            (addr, size, f.next().unwrap())
+        })
+        .collect();
+    for kernel in ["init_paths", "traverse8", "extend"] {
+        assert!(
+            entries.iter().any(|(a, s, name)| *a > 0
+                && *s > 0
+                && name.starts_with(&format!("cohort vector form {kernel}__"))),
+            "no entry for `{kernel}` in {}:\n{text}",
+            map.display()
+        );
+    }
+    // No two kernels' code overlaps.
+    let mut spans: Vec<(u64, u64)> = entries.iter().map(|(a, s, _)| (*a, a + s)).collect();
+    spans.sort();
+    assert!(spans.windows(2).all(|w| w[0].1 <= w[1].0), "{text}");
+}
+
 #[test]
 fn renders_and_writes_outputs() {
     if !has_gpu() {

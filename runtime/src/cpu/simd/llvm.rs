@@ -225,22 +225,23 @@ impl Jit {
     }
 
     /// The entry address of a kernel's vector form if it is linked already or its object
-    /// file is in the cache (then it is linked now); `None` if it must be compiled.
-    pub fn cached(&self, ir: &str, entry: &str) -> Option<Result<usize, String>> {
+    /// file is in the cache (then it is linked now); `None` if it must be compiled. `name`
+    /// is the kernel's, for profiles (`perf_map`).
+    pub fn cached(&self, ir: &str, entry: &str, name: &str) -> Option<Result<usize, String>> {
         let key = self.key(ir);
         if let Some(&addr) = self.lock_linker().linked.get(&key) {
             return Some(Ok(addr));
         }
         let object = std::fs::read(object_file(key)?).ok()?;
-        Some(self.link(key, entry, &object))
+        Some(self.link(key, entry, name, &object))
     }
 
     /// Compiles the IR of a kernel's vector form, whose entry function is named `entry`
     /// (or takes its object file from the cache), links it and returns the entry's
     /// address and the time LLVM took (zero from the cache). The same IR is linked once
     /// per process.
-    pub fn compile(&self, ir: &str, entry: &str) -> Result<(usize, Duration), String> {
-        if let Some(r) = self.cached(ir, entry) {
+    pub fn compile(&self, ir: &str, entry: &str, name: &str) -> Result<(usize, Duration), String> {
+        if let Some(r) = self.cached(ir, entry, name) {
             return r.map(|a| (a, Duration::ZERO));
         }
         let key = self.key(ir);
@@ -261,7 +262,7 @@ impl Jit {
         if let Some(p) = host_time_file(key) {
             let _ = std::fs::remove_file(p);
         }
-        self.link(key, entry, &object).map(|a| (a, took))
+        self.link(key, entry, name, &object).map(|a| (a, took))
     }
 
     fn lock_linker(&self) -> std::sync::MutexGuard<'_, Linker> {
@@ -269,7 +270,7 @@ impl Jit {
     }
 
     /// Links an object file and returns its entry's address.
-    fn link(&self, key: u64, entry: &str, object: &[u8]) -> Result<usize, String> {
+    fn link(&self, key: u64, entry: &str, name: &str, object: &[u8]) -> Result<usize, String> {
         let mut l = self.lock_linker();
         if let Some(&addr) = l.linked.get(&key) {
             return Ok(addr);
@@ -291,6 +292,9 @@ impl Jit {
             addr as usize
         };
         l.linked.insert(key, addr);
+        if super::perf_map::enabled() {
+            super::perf_map::record(name, addr, object);
+        }
         Ok(addr)
     }
 

@@ -3,13 +3,15 @@
 //! found on the machine (`llvm`). Kernels it does not cover, and machines without a
 //! libLLVM, keep the host form; where a kernel has both, `choice` picks one.
 //! `COHORT_CPU_SIMD_LOG=1` says which form each kernel runs and why;
-//! `COHORT_CPU_SIMD_DUMP=DIR` writes each kernel's IR to `DIR/<kernel>.ll`.
+//! `COHORT_CPU_SIMD_DUMP=DIR` writes each kernel's IR to `DIR/<kernel>.ll`;
+//! `COHORT_CPU_SIMD_PERF_MAP=1` names each one's code for `perf` (`perf_map`).
 
 mod choice;
 mod expr;
 mod llvm;
 mod lower;
 mod memory;
+mod perf_map;
 mod types;
 
 use std::collections::HashMap;
@@ -223,7 +225,7 @@ fn probe(k: &CompiledKernel) -> State {
         );
     }
     let key = jit.key(&ir);
-    let Some(r) = jit.cached(&ir, lower::RUN) else {
+    let Some(r) = jit.cached(&ir, lower::RUN, &k.name) else {
         let host_ns = llvm::host_time(key);
         return State::Cold {
             ir,
@@ -277,7 +279,7 @@ fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
 /// Compiles (or links from the cache) `k`'s vector form from its IR; with LLVM's time.
 fn build(k: &CompiledKernel, ir: &str) -> Result<(SimdKernel, std::time::Duration), String> {
     let jit = llvm::jit().as_ref().map_err(Clone::clone)?;
-    let (addr, took) = jit.compile(ir, lower::RUN).map_err(|e| {
+    let (addr, took) = jit.compile(ir, lower::RUN, &k.name).map_err(|e| {
         // The lowering wrote IR that LLVM refuses: a bug of this backend, not the kernel's.
         format!(
             "{e} (a Cohort CPU backend bug, kernel `{}` at {})",
