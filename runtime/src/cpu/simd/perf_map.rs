@@ -5,7 +5,7 @@
 //! only that about half its time is "[JIT]".
 
 use std::io::Write as _;
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 
 /// Whether the environment asks for the map.
 pub fn enabled() -> bool {
@@ -14,13 +14,12 @@ pub fn enabled() -> bool {
 }
 
 /// Appends `addr size name` for the code of `object` (an ELF object file whose `.text`
-/// section the JIT placed at `addr`, the entry being its first function).
+/// section the JIT placed at `addr`, the entry being its first function). Called under
+/// the JIT's linker lock, so lines from different threads never interleave.
 pub fn record(name: &str, addr: usize, object: &[u8]) {
-    static FILE: Mutex<()> = Mutex::new(());
     let Some(size) = text_size(object) else {
         return;
     };
-    let _one = FILE.lock().unwrap_or_else(|e| e.into_inner());
     let path = format!("/tmp/perf-{}.map", std::process::id());
     // A profile without names is all that a failure here costs.
     if let Ok(mut f) = std::fs::OpenOptions::new()
