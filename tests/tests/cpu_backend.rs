@@ -348,23 +348,70 @@ fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
     }
 }
 
-/// Transcendentals of `xs[gi / 8]` (every lane of a vector block alike, as a group's
-/// shared draw is at warp and block level) and of `xs[gi]` (lanes apart), side by side.
-#[kernel(workgroup = 64)]
-pub fn transcendentals(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
-    let i = gi as usize;
-    let k = i / 8;
-    let x = if i % 16 < 8 { xs[k] } else { xs[i] };
-    let y = xs[(k + 1) % xs.len()];
-    let a = x.sin() + x.cos() * 2.0;
-    let b = x.exp() + x.exp2() * 0.5 + x.abs().ln() + x.abs().log2() * 0.25;
-    let c = x.abs().powf(y) + x.tan() + x.atan() * 0.5 + x.atan2(y);
-    let d = x.acos() + x.asin() * 3.0;
-    out[i] = Vec4::new(a, b, c, d);
+/// The argument of invocation `i` of `transcendentals`, from `xs`: its first half the
+/// values, its second half their negations. Each value (at `i / 32`) fills four vector
+/// blocks of 8 lanes, one of each kind (`i / 8 % 4`): 0, every lane alike (as a group's
+/// shared draw is at warp and block level); 1, lanes apart; 2, alike but for lane 7, which
+/// has the value negated (so +0 beside -0, and NaN's sign flipped; read from the buffer,
+/// so that LLVM cannot move the negation past an odd function); 3, the odd lanes alike and
+/// the even lanes apart, where only the odd lanes run (see the kernel).
+#[kernel_fn]
+pub fn transcendental_arg(i: usize, xs: &[f32]) -> f32 {
+    let half = xs.len() / 2;
+    let j = i / 32;
+    let kind = i / 8 % 4;
+    let lane = i % 8;
+    let mut x = xs[j];
+    if kind == 1 || (kind == 3 && lane % 2 == 0) {
+        x = xs[(j * 8 + lane) % half];
+    } else if kind == 2 && lane == 7 {
+        x = xs[half + j];
+    }
+    x
 }
 
-/// Every transcendental the vector form lowers (LLVM's intrinsics and libm calls, one per
-/// lane), over blocks of equal and of distinct arguments with edge values (NaN, the
+/// The second argument (of `powf` and `atan2`) of invocation `i`: the next of `xs`, or
+/// the one after it for lane 6 of a block of kind 2.
+#[kernel_fn]
+pub fn transcendental_y(i: usize, xs: &[f32]) -> f32 {
+    let mut j = i / 32 + 1;
+    if i / 8 % 4 == 2 && i % 8 == 6 {
+        j += 1;
+    }
+    xs[j % (xs.len() / 2)]
+}
+
+/// Transcendentals of `transcendental_arg`: the vector form calls each function once for
+/// a block whose running lanes pass the same bits, once per lane otherwise. In blocks of
+/// kind 3 the even lanes (lane 0 among them) skip the functions, so that the odd lanes
+/// alone decide; in blocks of kind 2 lane 6 has its own second argument `y`.
+#[kernel(workgroup = 64)]
+pub fn transcendentals(
+    #[builtin(global_index)] gi: u32,
+    xs: &[f32],
+    out: &mut [Vec4],
+    odd: &mut [Vec4],
+) {
+    let i = gi as usize;
+    let x = transcendental_arg(i, xs);
+    let y = transcendental_y(i, xs);
+    let mut r = Vec4::splat(-7.0);
+    // Odd functions, each alone, so that the sign of a zero result shows.
+    let mut o = Vec4::splat(-7.0);
+    if i / 8 % 4 != 3 || i % 2 == 1 {
+        o = Vec4::new(x.sin(), x.tan(), x.atan(), x.asin());
+        let a = x.sin() + x.cos() * 2.0;
+        let b = x.exp() + x.exp2() * 0.5 + x.abs().ln() + x.abs().log2() * 0.25;
+        let c = x.abs().powf(y) + x.tan() + x.atan() * 0.5 + x.atan2(y);
+        let d = x.acos() + x.asin() * 3.0 + (x * 0.5).cos();
+        r = Vec4::new(a, b, c, d);
+    }
+    out[i] = r;
+    odd[i] = o;
+}
+
+/// Every transcendental the vector form lowers (LLVM's intrinsics and libm calls), over
+/// blocks of equal, of distinct and of nearly equal arguments with edge values (NaN, the
 /// infinities, -0, subnormals, the extremes, past `exp`'s range), gives the host run's
 /// bits in both CPU forms.
 #[test]
@@ -396,22 +443,39 @@ fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
     while xs.len() < 256 {
         xs.push((rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 8.0);
     }
-    let n = xs.len() as u32;
+    let n = 32 * xs.len() as u32;
+    xs.extend(xs.clone().into_iter().map(|x| -x));
     let mut want = vec![Vec4::ZERO; n as usize];
+    let mut want_odd = vec![Vec4::ZERO; n as usize];
     cohort::host::for_each_invocation(n, 64, cohort::Group::Thread, |inv| {
-        transcendentals(inv.global_index, &xs, &mut want)
+        transcendentals(inv.global_index, &xs, &mut want, &mut want_odd)
     });
+    let want: Vec<[Vec4; 2]> = want
+        .into_iter()
+        .zip(want_odd)
+        .map(|(a, b)| [a, b])
+        .collect();
     for forms in [Forms::Host, Forms::Vector] {
         let d = Device::cpu_with(forms).unwrap();
+        let spec = transcendentals::spec(&d, None);
+        let compiled =
+            cohort::compiler::compile(&transcendentals::build(&spec), "transcendentals".into())
+                .unwrap();
+        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+            panic!("no vector form: {e}");
+        }
         let xs_b = d.upload(&xs).unwrap();
         let out = d.alloc::<Vec4>(n as usize).unwrap();
-        transcendentals::launch(&d, n, &xs_b, &out).unwrap();
-        let got = d.read(&out).unwrap();
-        if let Some(i) = (0..n as usize).find(|&i| bits(&got[i..=i]) != bits(&want[i..=i])) {
+        let odd = d.alloc::<Vec4>(n as usize).unwrap();
+        transcendentals::launch(&d, n, &xs_b, &out, &odd).unwrap();
+        let (got, got_odd) = (d.read(&out).unwrap(), d.read(&odd).unwrap());
+        let got: Vec<[Vec4; 2]> = got.into_iter().zip(got_odd).map(|(a, b)| [a, b]).collect();
+        if let Some(i) = (0..n as usize).find(|&i| bits(&got[i]) != bits(&want[i])) {
             panic!(
-                "{forms:?}: invocation {i} (x = {}, y = {}): {:?} against the host's {:?}",
-                if i % 16 < 8 { xs[i / 8] } else { xs[i] },
-                xs[(i / 8 + 1) % xs.len()],
+                "{forms:?}: invocation {i} (block kind {}, x = {}, y = {}): {:?} against the host's {:?}",
+                i / 8 % 4,
+                transcendental_arg(i, &xs),
+                transcendental_y(i, &xs),
                 got[i],
                 want[i]
             );

@@ -88,6 +88,76 @@ impl Fx<'_> {
         self.call(&v, &format!("llvm.{name}.v{W}f32"), &args)
     }
 
+    /// A function of floats that LLVM has no vector instruction for (`sin`, `acosf`, ...),
+    /// so it costs one libm call per lane. Where every running lane passes the same
+    /// arguments bit for bit (a group's shared draw, a value of constants), one call
+    /// serves them all: the same C function on the same bits gives the same result, so the
+    /// block's values are the host form's either way. `libm` names a C function;
+    /// otherwise `name` is an LLVM intrinsic (`llvm.NAME.f32`, which is that C function).
+    fn once_if_uniform(&mut self, name: &str, libm: bool, xs: &[String]) -> String {
+        let v = lanes("float");
+        let vi = lanes("i32");
+        let mask = self.exec();
+        let first = self.first_active(&mask);
+        let mut firsts = Vec::new();
+        let mut differ: Option<String> = None;
+        for x in xs {
+            let x0 = self.op(&format!("extractelement {v} {x}, i32 {first}"));
+            let bits = self.op(&format!("bitcast {v} {x} to {vi}"));
+            let b0 = self.op(&format!("bitcast float {x0} to i32"));
+            let all = self.splat("i32", &b0);
+            let same = self.op(&format!("icmp eq {vi} {bits}, {all}"));
+            let d = self.not(&same);
+            differ = Some(match differ {
+                None => d,
+                Some(acc) => self.or(&acc, &d),
+            });
+            firsts.push(("float".to_string(), x0));
+        }
+        let differ = differ.unwrap_or_else(|| splat_const("i1", "false"));
+        let differ = self.and(&mask, &differ);
+        let diverge = self.any(&differ);
+        let slot = self.alloca(&v);
+        let (one, many, join) = (self.label(), self.label(), self.label());
+        self.line(&format!("br i1 {diverge}, label %{many}, label %{one}"));
+        self.body.push_str(&format!("{one}:\n"));
+        let callee = if libm {
+            name.to_string()
+        } else {
+            format!("llvm.{name}.f32")
+        };
+        let r = self.call("float", &callee, &firsts);
+        let r = self.splat("float", &r);
+        self.line(&format!("store {v} {r}, ptr {slot}"));
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{many}:\n"));
+        let r = if libm {
+            self.libm(name, xs)
+        } else {
+            self.fintr(name, xs)
+        };
+        self.line(&format!("store {v} {r}, ptr {slot}"));
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{join}:\n"));
+        self.op(&format!("load {v}, ptr {slot}"))
+    }
+
+    /// Whether `Sin` or `Cos` of `arg` has its partner (`Cos` or `Sin` of the same
+    /// expression) in this function: LLVM turns such a pair into one `sincosf` call per
+    /// lane when both sit in one basic block, which a uniformity test between them would
+    /// prevent. The pairs the kernels have are a direction's azimuth, which varies by lane.
+    fn sincos_pair(&self, fun: Mf, arg: Handle<naga::Expression>) -> bool {
+        let partner = match fun {
+            Mf::Sin => Mf::Cos,
+            Mf::Cos => Mf::Sin,
+            _ => return false,
+        };
+        self.fun
+            .expressions
+            .iter()
+            .any(|(_, e)| matches!(*e, E::Math { fun: f, arg: a, .. } if f == partner && a == arg))
+    }
+
     /// A libm function, called once per lane (the C function the host form calls).
     fn libm(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
@@ -572,7 +642,20 @@ impl Fx<'_> {
             move |fx: &mut Self, c: &[String]| -> Lowering<String> { Ok(fx.fintr(name, c)) }
         };
         let libm = |name: &'static str| {
-            move |fx: &mut Self, c: &[String]| -> Lowering<String> { Ok(fx.libm(name, c)) }
+            move |fx: &mut Self, c: &[String]| -> Lowering<String> {
+                Ok(fx.once_if_uniform(name, true, c))
+            }
+        };
+        // LLVM expands these intrinsics on vectors into one libm call per lane.
+        let paired = self.sincos_pair(fun, arg);
+        let per_lane = move |name: &'static str| {
+            move |fx: &mut Self, c: &[String]| -> Lowering<String> {
+                Ok(if paired {
+                    fx.fintr(name, c)
+                } else {
+                    fx.once_if_uniform(name, false, c)
+                })
+            }
         };
         match fun {
             Mf::Abs if float => self.map(&args, n, st, intrinsic("fabs")),
@@ -627,13 +710,13 @@ impl Fx<'_> {
             Mf::Ceil if float => self.map(&args, n, st, intrinsic("ceil")),
             Mf::Trunc if float => self.map(&args, n, st, intrinsic("trunc")),
             Mf::Sqrt if float => self.map(&args, n, st, intrinsic("sqrt")),
-            Mf::Sin if float => self.map(&args, n, st, intrinsic("sin")),
-            Mf::Cos if float => self.map(&args, n, st, intrinsic("cos")),
-            Mf::Exp if float => self.map(&args, n, st, intrinsic("exp")),
-            Mf::Exp2 if float => self.map(&args, n, st, intrinsic("exp2")),
-            Mf::Log if float => self.map(&args, n, st, intrinsic("log")),
-            Mf::Log2 if float => self.map(&args, n, st, intrinsic("log2")),
-            Mf::Pow if float => self.map(&args, n, st, intrinsic("pow")),
+            Mf::Sin if float => self.map(&args, n, st, per_lane("sin")),
+            Mf::Cos if float => self.map(&args, n, st, per_lane("cos")),
+            Mf::Exp if float => self.map(&args, n, st, per_lane("exp")),
+            Mf::Exp2 if float => self.map(&args, n, st, per_lane("exp2")),
+            Mf::Log if float => self.map(&args, n, st, per_lane("log")),
+            Mf::Log2 if float => self.map(&args, n, st, per_lane("log2")),
+            Mf::Pow if float => self.map(&args, n, st, per_lane("pow")),
             Mf::Fma if float => self.map(&args, n, st, intrinsic("fma")),
             Mf::Tan if float => self.map(&args, n, st, libm("tanf")),
             Mf::Acos if float => self.map(&args, n, st, libm("acosf")),

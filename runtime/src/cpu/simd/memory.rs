@@ -467,17 +467,22 @@ impl Fx<'_> {
         Ok(Val::r(ty, r))
     }
 
-    /// The first lane on in `mask` (`W - 1` when none is) and that lane's offset in `d`.
+    /// The first lane on in `mask` (lane 0 when none is) and that lane's offset in `d`.
     fn first_lane(&mut self, mask: &str, d: &str) -> (String, String) {
+        let first = self.first_active(mask);
+        let d0 = self.op(&format!("extractelement {} {d}, i32 {first}", lanes("i64")));
+        (first, d0)
+    }
+
+    /// The index (`i32`) of the first lane on in `mask` (lane 0 when none is).
+    pub fn first_active(&mut self, mask: &str) -> String {
         let m = Fx::mask_ty();
         let w = super::types::W;
         let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
         self.declare(&format!("declare i{w} @llvm.cttz.i{w}(i{w}, i1)"));
         let first = self.op(&format!("call i{w} @llvm.cttz.i{w}(i{w} {bits}, i1 false)"));
         let first = self.op(&format!("zext i{w} {first} to i32"));
-        let first = self.op(&format!("and i32 {first}, {}", w - 1));
-        let d0 = self.op(&format!("extractelement {} {d}, i32 {first}", lanes("i64")));
-        (first, d0)
+        self.op(&format!("and i32 {first}, {}", w - 1))
     }
 
     /// Whether every lane of `mask` sits at `base0 + stride * lane`, with `base0` the offset
