@@ -561,3 +561,77 @@ fn bits(v: &[Vec4]) -> Vec<[u32; 4]> {
         })
         .collect()
 }
+
+/// Atomic adds the vector form makes once per block (every running lane alike: one
+/// address, one value) beside those it makes lane by lane (values or addresses apart),
+/// each returning the old value.
+#[kernel(workgroup = 64)]
+pub fn counters(#[builtin(global_index)] gi: u32, counts: &[AtomicU32], olds: &mut [UVec4]) {
+    let i = gi as usize;
+    if i >= olds.len() {
+        return;
+    }
+    let a = counts[0].fetch_add(3, Ordering::Relaxed);
+    let mut b = u32::MAX;
+    if i % 3 != 0 {
+        b = counts[1].fetch_sub(5, Ordering::Relaxed);
+    }
+    let c = counts[2].fetch_add(gi % 4, Ordering::Relaxed);
+    let d = counts[3 + i % 2].fetch_add(1, Ordering::Relaxed);
+    olds[i] = UVec4::new(a, b, c, d);
+}
+
+/// Each counter ends at the sum of what was added, and the old values that the adds
+/// returned are each step of it exactly once (so a block that adds once hands its lanes
+/// consecutive old values), in both CPU forms, over a dispatch that ends inside a block.
+#[test]
+fn atomic_adds_return_every_old_value_once() {
+    use cohort::runtime::cpu::simd::Forms;
+    let n = 1003u32;
+    for forms in [Forms::Host, Forms::Vector] {
+        let d = Device::cpu_with(forms).unwrap();
+        let spec = counters::spec(&d, None);
+        let compiled =
+            cohort::compiler::compile(&counters::build(&spec), "counters".into()).unwrap();
+        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+            panic!("no vector form: {e}");
+        }
+        let counts = d.alloc::<u32>(5).unwrap();
+        let olds = d.alloc::<UVec4>(n as usize).unwrap();
+        counters::launch(&d, n, &counts, &olds).unwrap();
+        let (counts, olds) = (d.read(&counts).unwrap(), d.read(&olds).unwrap());
+        let sorted = |f: &dyn Fn(usize, &UVec4) -> Option<u32>| {
+            let mut v: Vec<u32> = olds
+                .iter()
+                .enumerate()
+                .filter_map(|(i, o)| f(i, o))
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let a = sorted(&|_, o| Some(o.x));
+        assert_eq!(
+            a,
+            (0..n).map(|k| 3 * k).collect::<Vec<_>>(),
+            "{forms:?}: alike"
+        );
+        assert_eq!(counts[0], 3 * n, "{forms:?}");
+        let subs = (0..n).filter(|i| i % 3 != 0).count() as u32;
+        let mut want_b: Vec<u32> = (0..subs).map(|k| 0u32.wrapping_sub(5 * k)).collect();
+        want_b.sort_unstable();
+        assert_eq!(
+            sorted(&|i, o| (i % 3 != 0).then_some(o.y)),
+            want_b,
+            "{forms:?}: sub"
+        );
+        assert!(olds.iter().step_by(3).all(|o| o.y == u32::MAX), "{forms:?}");
+        assert_eq!(counts[1], 0u32.wrapping_sub(5 * subs), "{forms:?}");
+        assert_eq!(counts[2], (0..n).map(|g| g % 4).sum::<u32>(), "{forms:?}");
+        for parity in 0..2 {
+            let m = (0..n as usize).filter(|i| i % 2 == parity).count() as u32;
+            let got = sorted(&|i, o| (i % 2 == parity).then_some(o.w));
+            assert_eq!(got, (0..m).collect::<Vec<_>>(), "{forms:?}: apart");
+            assert_eq!(counts[3 + parity], m, "{forms:?}");
+        }
+    }
+}

@@ -822,8 +822,71 @@ impl Fx<'_> {
         self.blend_typed(mask, new, old, &t)
     }
 
+    /// Where every lane of `mask` adds (`op` `add` or `sub`) the same value at the same
+    /// address, as a kernel counts what it finished, one atomic adds the value times the
+    /// number of lanes, and each lane's old value is what the lane-by-lane loop would give
+    /// it (the old value plus the value times the lanes before it). Lanes that contend for
+    /// one cache line then make one locked operation per block instead of one each. Falls
+    /// through to the lane-by-lane loop otherwise; branches to `join` when done.
+    fn atomic_add_once(
+        &mut self,
+        op: &str,
+        mask: &str,
+        ptrs: &str,
+        val: &str,
+        old_slot: &str,
+        join: &str,
+    ) {
+        let w = super::types::W;
+        let (v, v64, m) = (lanes("i32"), lanes("i64"), Fx::mask_ty());
+        let first = self.first_active(mask);
+        let p0 = self.op(&format!(
+            "extractelement {} {ptrs}, i32 {first}",
+            lanes("ptr")
+        ));
+        let at = self.op(&format!("ptrtoint {} {ptrs} to {v64}", lanes("ptr")));
+        let at0 = self.op(&format!("ptrtoint ptr {p0} to i64"));
+        let at0s = self.splat("i64", &at0);
+        let same_at = self.op(&format!("icmp eq {v64} {at}, {at0s}"));
+        let x0 = self.op(&format!("extractelement {v} {val}, i32 {first}"));
+        let x0s = self.splat("i32", &x0);
+        let same_x = self.op(&format!("icmp eq {v} {val}, {x0s}"));
+        let same = self.and(&same_at, &same_x);
+        let differ = self.not(&same);
+        let differ = self.and(mask, &differ);
+        let diverge = self.any(&differ);
+        let none = self.not(mask);
+        let none = self.op(&format!(
+            "call i1 @llvm.vector.reduce.and.v{w}i1({m} {none})"
+        ));
+        self.declare(&format!("declare i1 @llvm.vector.reduce.and.v{w}i1({m})"));
+        let either = self.op(&format!("or i1 {diverge}, {none}"));
+        let (once, lanes_) = (self.label(), self.label());
+        self.line(&format!("br i1 {either}, label %{lanes_}, label %{once}"));
+        self.body.push_str(&format!("{once}:\n"));
+        let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
+        self.declare(&format!("declare i{w} @llvm.ctpop.i{w}(i{w})"));
+        let count = self.op(&format!("call i{w} @llvm.ctpop.i{w}(i{w} {bits})"));
+        let count = self.op(&format!("zext i{w} {count} to i32"));
+        let total = self.op(&format!("mul i32 {x0}, {count}"));
+        let old = self.op(&format!("atomicrmw {op} ptr {p0}, i32 {total} seq_cst"));
+        // Each lane's count of running lanes before it.
+        let bits32 = self.op(&format!("zext i{w} {bits} to i32"));
+        let bits32 = self.splat("i32", &bits32);
+        let below: Vec<String> = (0..w).map(|l| format!("i32 {}", (1u32 << l) - 1)).collect();
+        let before = self.op(&format!("and {v} {bits32}, <{}>", below.join(", ")));
+        self.declare(&format!("declare {v} @llvm.ctpop.v{w}i32({v})"));
+        let before = self.op(&format!("call {v} @llvm.ctpop.v{w}i32({v} {before})"));
+        let step = self.op(&format!("mul {v} {x0s}, {before}"));
+        let olds = self.splat("i32", &old);
+        let olds = self.op(&format!("{op} {v} {olds}, {step}"));
+        self.line(&format!("store {v} {olds}, ptr {old_slot}"));
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{lanes_}:\n"));
+    }
+
     /// An atomic read-modify-write, one lane after another (in lane order, as the host
-    /// form runs its invocations).
+    /// form runs its invocations), or, for an add that every lane makes alike, once.
     pub fn atomic(
         &mut self,
         pointer: Handle<naga::Expression>,
@@ -870,6 +933,13 @@ impl Fx<'_> {
             "store {} zeroinitializer, ptr {done_slot}",
             Fx::mask_ty()
         ));
+        let join = self.label();
+        if matches!(
+            fun,
+            naga::AtomicFunction::Add | naga::AtomicFunction::Subtract
+        ) {
+            self.atomic_add_once(op, &mask, &ptrs, &val, &old_slot, &join);
+        }
         for lane in 0..super::types::W {
             let on = self.op(&format!(
                 "extractelement {} {mask}, i32 {lane}",
@@ -906,6 +976,8 @@ impl Fx<'_> {
             self.line(&format!("br label %{next}"));
             self.body.push_str(&format!("{next}:\n"));
         }
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{join}:\n"));
         if let Some(r) = result {
             let old = self.op(&format!("load {v}, ptr {old_slot}"));
             let out = if cmp.is_some() {
