@@ -2,10 +2,10 @@
 # Old vs new `cohort render` (gpu-pack/cohort-old, gpu-pack/cohort-new, xz-packed) on one
 # machine in one run, alternating, two rounds; then Mitsuba's render test at its budget on
 # wgpu, Vulkan and the CPU (gpu-pack/mitsuba_reference). Writes under $OUT. Run through the
-# device tool from the repository root (BENCHMARKS.md, session 12).
+# device tool from the repository root (BENCHMARKS.md, 2026-11-26, e2cfea3 and f8a0627).
 set -uo pipefail
 for f in cohort-old cohort-new mitsuba_reference; do
-  [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build it here (release) and xz it first (BENCHMARKS.md, session 12)" >&2; exit 2; }
+  [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build it here (release) and xz it first (BENCHMARKS.md, 2026-11-26, e2cfea3 and f8a0627)" >&2; exit 2; }
 done
 OUT="${OUT:?set OUT to the folder for the results (the device tool sets it)}"
 scripts/unpack-bins.sh gpu-pack || exit 1

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 11's traversal experiments on a GPU machine, through the device tool, from the
-# repository root (BENCHMARKS.md, session 16). Old and new release binaries alternate in
-# one run:
+# repository root (BENCHMARKS.md, 2026-11-27, d2bc83f and 807cf8c). Old and new release
+# binaries alternate in one run:
 #   1. `traversal_variants` ($SCENES): traverse8 against any-hit, dynamic fetch and
 #      sorted rays, old binary first and last;
 #   2. `cohort render` on the four paper scenes and the shared scenes, two rounds;
@@ -12,7 +12,7 @@
 set -uo pipefail
 OUT="${OUT:?set OUT to the folder for the results (the device tool sets it)}"
 for f in traversal_variants traversal_variants-old cohort-old cohort-new kernel_bench shared-scenes.tar; do
-  [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build the release binaries here, xz them into gpu-pack/ and pack ../shared/scenes as shared-scenes.tar.xz first (BENCHMARKS.md, session 16)" >&2; exit 2; }
+  [ -f "gpu-pack/$f.xz" ] || { echo "gpu-pack/$f.xz is missing: build the release binaries here, xz them into gpu-pack/ and pack ../shared/scenes as shared-scenes.tar.xz first (BENCHMARKS.md, 2026-11-27, d2bc83f and 807cf8c)" >&2; exit 2; }
 done
 R=$(mktemp -d)
 scripts/unpack-bins.sh gpu-pack || exit 1

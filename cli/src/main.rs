@@ -513,7 +513,8 @@ fn render(a: RenderArgs) -> Result<(), String> {
     bar.finish_and_clear();
     let provenance = Provenance::of(&a.scene, (w, h), &opts, &device_names.join("; "));
     // The two files are encoded at once, on two threads: at 1024x1024 each takes a tenth
-    // of a second or more, as long as a short render itself (BENCHMARKS.md, session 17).
+    // of a second or more, as long as a short render itself (BENCHMARKS.md, 2026-11-27,
+    // ab1bebc).
     let attributes = provenance.to_attributes();
     let writing = std::time::Instant::now();
     // Both are written to temporary files first and put in place only when both were

@@ -858,7 +858,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             // One global atomic per ended path, not a per-workgroup count: without its
             // two workgroup barriers the kernel synchronises only where its group level
             // asks, so the CPU backend runs it as a plain loop (1.6-2x its paths/s),
-            // while extend's time on an H200 did not change (BENCHMARKS.md, session 18).
+            // while extend's time on an H200 did not change (BENCHMARKS.md, 2026-11-27,
+            // 56c20c1).
             completed[0].fetch_add(1, Ordering::Relaxed);
             // The copy's next path: the pixel's other copies trace those in between.
             let next = path + f.copies;

@@ -6,7 +6,8 @@
 //! are `loops = finite`: a ray visits each node of the (finite, acyclic) tree at most
 //! once, a leaf holds at most 8 triangles, and a ray whose direction or origin would send
 //! it through invalid references (NaN, zero) stops before its first node. naga's
-//! loop-bound counters cost 8 % of the renderer's paths/s (BENCHMARKS.md, session 16).
+//! loop-bound counters cost 8 % of the renderer's paths/s (BENCHMARKS.md, 2026-11-27,
+//! d2bc83f and 807cf8c).
 
 use crate::layout::*;
 use crate::shadow::finish_slot;

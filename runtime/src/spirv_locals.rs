@@ -8,8 +8,9 @@
 //! whose elements are unspecified until written. A null initializer on a 64-entry
 //! traversal stack is 256 bytes of local-memory stores per invocation that are never read:
 //! removing it with the stack's explicit zero fill measured 1.12x renderer paths/s on
-//! confroom (H200, BENCHMARKS.md, session 16). Only arrays are touched: scalars, vectors
-//! and structs live in registers, where the initializer costs nothing.
+//! confroom (H200, BENCHMARKS.md, 2026-11-27, d2bc83f and 807cf8c). Only arrays are
+//! touched: scalars, vectors and structs live in registers, where the initializer costs
+//! nothing.
 
 use std::collections::HashSet;
 

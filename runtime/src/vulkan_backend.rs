@@ -1043,7 +1043,7 @@ pub fn lower(kernel: &CompiledKernel) -> Result<Vec<u32>> {
         // naga guards every loop with a 64-bit iteration counter, so that a driver cannot
         // assume an endless loop away. A kernel that promises `loops = finite` does
         // without: on confroom's traversal the counters cost 8 % of the renderer's paths/s
-        // (H200, BENCHMARKS.md, session 16).
+        // (H200, BENCHMARKS.md, 2026-11-27, d2bc83f and 807cf8c).
         force_loop_bounding: !kernel.finite_loops,
         ..Default::default()
     };
