@@ -7,6 +7,15 @@ fn cohort() -> Command {
     Command::new(env!("CARGO_BIN_EXE_cohort"))
 }
 
+/// Asserts that a run succeeded, showing what it wrote to stderr if it did not.
+fn assert_ok(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn has_gpu() -> bool {
     cohort::runtime::Device::for_tests(cohort::runtime::BackendKind::Vulkan).is_some()
 }
@@ -77,6 +86,39 @@ fn the_png_goes_beside_the_exr_unless_named() {
     assert_eq!(&std::fs::read(dir.join("y.png")).unwrap()[1..4], b"PNG");
 }
 
+/// A library named by `COHORT_LIBLLVM` that loads but cannot run the JIT (here libm, which
+/// is no LLVM at all) leaves the CPU backend on its host forms, and `cohort devices` says
+/// which library was refused and why; the render still runs.
+#[test]
+fn a_libllvm_that_cannot_run_the_jit_is_named_with_its_reason() {
+    let dir = tempdir();
+    let out = cohort()
+        .current_dir(&dir)
+        .arg("devices")
+        .env("COHORT_LIBLLVM", "libm.so.6")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let cpu = text
+        .lines()
+        .find(|l| l.starts_with("cpu"))
+        .unwrap_or_default();
+    assert!(
+        cpu.contains("host forms (no libLLVM (15 or newer) could run the JIT (libm.so.6: ")
+            && cpu.contains("LLVMInitializeX86TargetInfo"),
+        "{text}"
+    );
+    let out = cohort()
+        .current_dir(&dir)
+        .args(["render", "--width", "8", "--height", "8", "--paths", "1"])
+        .args(["--backend", "cpu"])
+        .env("COHORT_LIBLLVM", "libm.so.6")
+        .env("COHORT_CPU_SIMD", "vector")
+        .output()
+        .unwrap();
+    assert_ok(&out);
+}
+
 /// `COHORT_CPU_SIMD_PERF_MAP=1` names the vector forms of a render's kernels, at their
 /// code's address and size, in the map `perf` reads (`/tmp/perf-PID.map`).
 #[test]
@@ -102,11 +144,7 @@ fn the_perf_map_names_the_vector_forms() {
         .unwrap();
     let map = std::path::PathBuf::from(format!("/tmp/perf-{}.map", child.id()));
     let out = child.wait_with_output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let text = std::fs::read_to_string(&map).unwrap_or_default();
     let _ = std::fs::remove_file(&map);
     let entries: Vec<(u64, u64, &str)> = text

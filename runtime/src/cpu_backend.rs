@@ -103,7 +103,9 @@ impl CpuDevice {
                     rayon::current_num_threads(),
                     match (forms, cpu::simd::llvm_library()) {
                         (Forms::Host, _) => "host forms".to_string(),
-                        (_, Err(_)) => "host forms (no libLLVM found)".to_string(),
+                        // The reason, so that a user who named a libLLVM learns why
+                        // it was refused.
+                        (_, Err(why)) => format!("host forms ({why})"),
                         (Forms::Vector, Ok(lib)) =>
                             format!("{}-lane vector forms ({lib})", cpu::simd::LANES),
                         (Forms::Measured, Ok(lib)) => format!(

@@ -78,22 +78,47 @@ const CANDIDATES: &[&str] = &[
     "libLLVM-15.so",
 ];
 
-fn open() -> Result<(Library, String), String> {
+/// The JIT on the first library of `COHORT_LIBLLVM`, or else of the usual names, that
+/// loads and sets one up. A library can load and still refuse: Ubuntu 24.04's LLVM 17
+/// cannot register the JIT's exception frames when it is opened privately (as here, so
+/// that its symbols never displace those of another LLVM in the process, Mesa's), so the
+/// next candidate is tried.
+fn open() -> Result<Jit, String> {
     let wanted: Vec<String> = match std::env::var("COHORT_LIBLLVM") {
         Ok(p) if !p.is_empty() => vec![p],
         _ => CANDIDATES.iter().map(|s| s.to_string()).collect(),
     };
+    let mut refused = Vec::new();
     let mut last = String::from("no libLLVM named");
     for name in wanted {
         // SAFETY: loading LLVM runs its static constructors, which have no preconditions.
         match unsafe { Library::new(&name) } {
-            Ok(lib) => return Ok((lib, name)),
+            Ok(lib) => {
+                // A second reference, never released: a library that refuses has already
+                // started LLVM (its targets initialised), and unloading it would run
+                // LLVM's static destructors in the middle of the process.
+                // SAFETY: as above; the library is loaded already.
+                if let Ok(keep) = unsafe { Library::new(&name) } {
+                    std::mem::forget(keep);
+                }
+                match Jit::on(lib, name.clone()) {
+                    Ok(jit) => return Ok(jit),
+                    Err(e) => refused.push(format!("{name}: {e}")),
+                }
+            }
             Err(e) => last = e.to_string(),
         }
     }
-    Err(format!(
-        "no libLLVM (15 or newer) found ({last}); set COHORT_LIBLLVM to its path"
-    ))
+    if refused.is_empty() {
+        Err(format!(
+            "no libLLVM (15 or newer) found ({last}); set COHORT_LIBLLVM to its path"
+        ))
+    } else {
+        Err(format!(
+            "no libLLVM (15 or newer) could run the JIT ({}); set COHORT_LIBLLVM to another",
+            refused.join("; ")
+        ))
+    }
 }
 
 fn sym<T: Copy>(lib: &Library, name: &str) -> Result<T, String> {
@@ -105,8 +130,8 @@ fn sym<T: Copy>(lib: &Library, name: &str) -> Result<T, String> {
 }
 
 impl Jit {
-    fn new() -> Result<Jit, String> {
-        let (lib, name) = open()?;
+    /// The JIT on the loaded library `lib`, named `name`.
+    fn on(lib: Library, name: String) -> Result<Jit, String> {
         // SAFETY: every symbol is declared with its C signature from llvm-c/*.h.
         unsafe {
             for init in [
@@ -387,7 +412,7 @@ pub fn save_host_time(key: u64, ns: u64) {
 /// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
 /// usable libLLVM).
 pub fn jit() -> &'static Result<Jit, String> {
-    JIT.get_or_init(Jit::new)
+    JIT.get_or_init(open)
 }
 
 static JIT: std::sync::OnceLock<Result<Jit, String>> = std::sync::OnceLock::new();

@@ -207,7 +207,12 @@ fn start_if_cold(kernels: &mut HashMap<u64, State>, k: &Arc<CompiledKernel>) {
 fn probe(k: &CompiledKernel) -> State {
     let jit = match llvm::jit() {
         Ok(j) => j,
-        Err(e) => return State::Done(Err(e.clone())),
+        Err(e) => {
+            if log() {
+                eprintln!("cohort: `{}` has no vector form: {e}", k.name);
+            }
+            return State::Done(Err(e.clone()));
+        }
     };
     let ir: Arc<str> = match lower::lower(k, lower::RUN) {
         Ok(ir) => ir.into(),
