@@ -1,7 +1,8 @@
-//! Coherent light sampling against independent light sampling at equal time (issue 8
-//! item 2): for each scene, a long reference with independent light sampling, then each
-//! configuration for the same kernel time, round-robin and repeated, reporting paths/s and
-//! the RMS error against the reference (relative to the reference's mean).
+//! Coherent light sampling against independent light sampling at equal time (the equal-time
+//! work against Mitsuba 3): for each scene, a long reference with independent light
+//! sampling, then each configuration for the same kernel time, round-robin and repeated,
+//! reporting paths/s and the RMS error against the reference (relative to the reference's
+//! mean).
 //!
 //! `cargo run --release -p cohort-render --example light_sampling -- [scene[,scene...]]
 //! [seconds] [reference seconds]` (defaults: `cornell,confroom`, 1, 20). Scenes are

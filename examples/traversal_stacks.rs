@@ -1,4 +1,4 @@
-//! Issue 11, item 3: where the 8-wide traversal keeps its stack, against the renderer's
+//! Traversal work, item 3: where the 8-wide traversal keeps its stack, against the renderer's
 //! `traverse8` (a 64-entry local array, one entry per pushed child), in one run on the
 //! renderer's tree, 2^20 primary and 2^20 unsorted diffuse rays of each scene (those of
 //! `kernel_bench`):

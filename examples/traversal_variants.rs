@@ -1,4 +1,4 @@
-//! Issue 11's traversal experiments against the renderer's `traverse8`, in one run on the
+//! The traversal work's experiments against the renderer's `traverse8`, in one run on the
 //! renderer's tree (`GpuBvh8::build_scene`), 2^20 primary and 2^20 unsorted diffuse rays
 //! of each scene (those of `kernel_bench`):
 //! - **any-hit** (`trace8::<AnyHit>`, the shadow rays' traversal) over the same rays,

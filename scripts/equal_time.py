@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Equal-time benchmark (issue 8): Mitsuba 3 and Cohort render the same Mitsuba XML scenes on
-the same GPU in the same run; RMS error of every image against Mitsuba's own long reference,
-versus time. Writes equal_time.csv, equal_time.md and equal_time.png into --out.
+"""Equal-time benchmark (image quality against Mitsuba 3): Mitsuba 3 and Cohort render the same
+Mitsuba XML scenes on the same GPU in the same run; RMS error of every image against Mitsuba's
+own long reference, versus time. Writes equal_time.csv, equal_time.md and equal_time.png into
+--out.
 
 RMS is relative: sqrt(mean over pixels and channels of (img - ref)^2) / mean(ref), as
 `cohort figures` computes it. References: a long Mitsuba render and a long Cohort render, each

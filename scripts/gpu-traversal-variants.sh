@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 11's traversal experiments on a GPU machine, through the device tool, from the
+# The traversal work's experiments on a GPU machine, through the device tool, from the
 # repository root (BENCHMARKS.md, 2026-11-27, d2bc83f and 807cf8c). Old and new release
 # binaries alternate in one run:
 #   1. `traversal_variants` ($SCENES): traverse8 against any-hit, dynamic fetch and

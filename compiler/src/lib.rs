@@ -22,8 +22,8 @@ pub use spec::{Group, KernelInfo, Spec, Target};
 #[cfg(test)]
 mod tests {
     /// The compiler knows no GPU API: its dependencies are naga and the math and byte
-    /// crates (issue 10). A dependency on a runtime or GPU crate would turn the layers
-    /// around again.
+    /// crates (the compiler split from the GPU API). A dependency on a runtime or GPU crate
+    /// would turn the layers around again.
     #[test]
     fn depends_on_no_gpu_api() {
         let manifest = include_str!("../Cargo.toml");

@@ -1,4 +1,4 @@
-//! Ray reordering before traversal (issue 11, item 4; Meister et al. 2020 sort secondary
+//! Ray reordering before traversal (traversal work, item 4; Meister et al. 2020 sort secondary
 //! rays to make them coherent): a counting sort of the live rays' slots by a 12-bit key,
 //! the direction octant and then the Morton code of the origin's cell in an 8x8x8 grid over
 //! the scene's bounds. Four dispatches ([`DISPATCHES`]): [`bin_clear`], [`bin_count`] (key

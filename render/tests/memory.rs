@@ -1,6 +1,7 @@
-//! Renderers created and dropped on one device run in constant memory (issue 15, "nothing
-//! grows"): a live viewer or a long sweep that switches configurations makes a renderer per
-//! configuration, and whatever one renderer keeps after it is dropped adds up.
+//! Renderers created and dropped on one device run in constant memory (the Mitsuba-scene
+//! work's "nothing grows"): a live viewer or a long sweep that switches configurations
+//! makes a renderer per configuration, and whatever one renderer keeps after it is dropped
+//! adds up.
 //!
 //! The measure is the process's resident set (Linux `/proc/self/statm`), which is what
 //! runs out on a laptop or a CI runner. The first renderers compile the pipelines and fill

@@ -50,7 +50,7 @@ pub struct DeviceInfo {
     /// (Mesa's llvmpipe, 22.x) specialises a kernel on the values of a bound uniform
     /// buffer whose words steer its branches, anew at every bind, and keeps each copy
     /// until the pipeline is destroyed: the path tracer's `extend` grew the process by
-    /// about 0.5 MB per dispatch (issue 15, `render/tests/memory.rs`).
+    /// about 0.5 MB per dispatch (the Mitsuba-scene work, `render/tests/memory.rs`).
     pub uniforms_as_storage: bool,
 }
 

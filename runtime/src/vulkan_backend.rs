@@ -328,8 +328,8 @@ impl VkDevice {
         unsafe {
             let _ = device.reset_fences(&[s.fence]);
             // Resetting the pool only resets its command buffers; without freeing, every
-            // call would leave one more allocated in the pool (issue 15: memory grew by
-            // about 8 KB per upload, write and read on the software driver).
+            // call would leave one more allocated in the pool (the Mitsuba-scene work: memory
+            // grew by about 8 KB per upload, write and read on the software driver).
             if let Some(cb) = allocated {
                 device.free_command_buffers(s.pool, &[cb]);
             }

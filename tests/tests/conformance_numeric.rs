@@ -1,11 +1,11 @@
-//! Numeric conformance (issue 9; docs/LANGUAGE.md sections 3-9): every operator, method,
-//! cast, constant and builtin that the language lists means what Rust (release) means, on
-//! wgpu (WGSL), on Vulkan (SPIR-V) and on the host. Each kernel of
+//! Numeric conformance (the numeric-semantics work; docs/LANGUAGE.md sections 3-9): every
+//! operator, method, cast, constant and builtin that the language lists means what Rust
+//! (release) means, on wgpu (WGSL), on Vulkan (SPIR-V) and on the host. Each kernel of
 //! `cohort_tests::kernels::numeric` runs on edge values (NaN of both signs, ±inf, ±0,
 //! subnormals, MIN/MAX, halfway cases, large values, saturation limits) over buffers whose
-//! sizes are not multiples of the workgroup size. Results are compared bit for bit
-//! (NaNs as "both NaN") with the host run of the same Rust function and with hand-written
-//! Rust `f32`/integer expressions, except where LANGUAGE.md states a precision bound
+//! sizes are not multiples of the workgroup size. Results are compared bit for bit (NaNs as
+//! "both NaN") with the host run of the same Rust function and with hand-written Rust
+//! `f32`/integer expressions, except where LANGUAGE.md states a precision bound
 //! (transcendental functions, `powf`).
 
 // The references spell out Rust's meaning on purpose (`!(x < y)`, `NAN as i32`, `x % 3 == 0`,

@@ -1,4 +1,5 @@
-//! The documentation names only what exists (issue 10, "the house"; issue 35):
+//! The documentation names only what exists (the clean-up that came with the CPU backend;
+//! the newcomer's README and docs):
 //!
 //! - every repository file the README, `docs/*.md` and BENCHMARKS.md name in backticks or
 //!   link to exists (placeholders such as `DIR/figures.csv`, an all-capitals component, are

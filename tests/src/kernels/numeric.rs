@@ -1,7 +1,7 @@
-//! Numeric conformance kernels (issue 9, docs/LANGUAGE.md sections 3-9): each invocation
-//! computes many operators, methods and casts on one input (or one pair of inputs) and
-//! writes every result, so that `tests/conformance_numeric.rs` can compare wgpu, Vulkan and
-//! the host bit for bit on edge values.
+//! Numeric conformance kernels (the numeric-semantics work, docs/LANGUAGE.md sections 3-9):
+//! each invocation computes many operators, methods and casts on one input (or one pair of
+//! inputs) and writes every result, so that `tests/conformance_numeric.rs` can compare
+//! wgpu, Vulkan and the host bit for bit on edge values.
 // The kernels test the meaning of `x != x`, `v == v` and `!(x < y)` on purpose.
 #![allow(clippy::eq_op, clippy::neg_cmp_op_on_partial_ord)]
 use cohort::prelude::*;
