@@ -184,7 +184,9 @@ fn only_waiting_operations_make_a_kernel_synchronise() {
 /// Reads and writes at `order[gi]` under a divergent condition: where a block's lanes
 /// land on consecutive elements the vector form moves them with one wide masked load or
 /// store, elsewhere it gathers and scatters; both must touch exactly the elements the
-/// host form touches. `xs[j].y` reads one member of each element (a sparse wide load).
+/// host form touches. `xs[j].y` reads one member of each element (a sparse wide load);
+/// scattered `xs[j]` are read as one row per lane, transposed; `xs[3]` is one element for
+/// every lane.
 #[kernel(workgroup = 64)]
 pub fn permuted_copies(
     #[builtin(global_index)] gi: u32,
@@ -197,7 +199,7 @@ pub fn permuted_copies(
     let j = order[gi as usize] as usize;
     if j % 3 != 1 {
         let v = xs[j];
-        out4[j] = v * 2.0 + Vec4::splat(ys[j] as f32);
+        out4[j] = v * 2.0 + Vec4::splat(ys[j] as f32) + xs[3];
         out1[j] = ys[j] + xs[j].y.to_bits();
     }
 }
@@ -235,7 +237,7 @@ fn consecutive_and_scattered_accesses_touch_what_the_host_form_touches() {
         for &j in &order {
             let j = j as usize;
             if j % 3 != 1 {
-                want4[j] = xs[j] * 2.0 + Vec4::splat(ys[j] as f32);
+                want4[j] = xs[j] * 2.0 + Vec4::splat(ys[j] as f32) + xs[3];
                 want1[j] = ys[j] + xs[j].y.to_bits();
             }
         }

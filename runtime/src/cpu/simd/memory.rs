@@ -1,7 +1,10 @@
 //! Pointers, loads, stores and atomics of the vector form. A naga pointer is a [`Place`]: a
 //! buffer binding plus a byte offset per lane, or a local variable (a stack slot holding all
 //! lanes, structure of arrays) plus an index path. Places whose path is the same for every
-//! lane load and store whole registers; others gather and scatter one scalar leaf at a time.
+//! lane load and store whole registers; others gather and scatter one scalar leaf at a time,
+//! except buffer loads: one load per leaf where every lane reads the same element, one wide
+//! load where the lanes read consecutive elements, and one row per lane, transposed, where
+//! a struct's elements lie apart.
 //! Every access is bounds-checked: an out-of-range lane sets the dispatch's error flag and
 //! is masked off, where the host form would panic.
 
@@ -40,6 +43,14 @@ pub enum Root {
 /// words (`Fx::wide_plan`): `m` words per lane and each leaf's (path, scalar, word).
 pub struct Wide {
     m: u64,
+    leaves: Vec<(Vec<u32>, &'static str, u64)>,
+}
+
+/// A plan for reading the lanes' scattered elements of a place as rows (`Fx::row_plan`):
+/// words `lo..lo + n` of each element, and each leaf's (path, scalar, word).
+pub struct Rows {
+    lo: u64,
+    n: u64,
     leaves: Vec<(Vec<u32>, &'static str, u64)>,
 }
 
@@ -395,7 +406,46 @@ impl Fx<'_> {
         {
             return self.load_maybe_uniform(p, &ty, *g, *konst, d, &mask);
         }
+        if let Root::Buf {
+            g,
+            konst,
+            dynamic: None,
+            ..
+        } = &p.root
+        {
+            return self.load_once(p, &ty, *g, &konst.to_string(), &mask);
+        }
         self.gather(p, &ty, &mask)
+    }
+
+    /// A buffer load at the same byte offset `at` (an `i64` operand) in every lane: one
+    /// scalar load per leaf, broadcast, where a gather from the same address would cost a
+    /// gather per leaf; zero where no lane loads (then the offset may be out of bounds).
+    fn load_once(&mut self, p: &Place, ty: &str, g: usize, at: &str, mask: &str) -> Lowering<Val> {
+        let slot = self.alloca(ty);
+        let any = self.any(mask);
+        let (load, skip, join) = (self.label(), self.label(), self.label());
+        self.line(&format!("br i1 {any}, label %{load}, label %{skip}"));
+        self.body.push_str(&format!("{load}:\n"));
+        let base = self.buffer_base(g);
+        let mut parts = Vec::new();
+        for l in leaves(self.m, &p.ty)? {
+            let s = scalar(l.scalar)?;
+            let off = self.op(&format!("add i64 {at}, {}", l.offset));
+            let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {off}"));
+            let x = self.op(&format!("load {s}, ptr {ptr}, align 4"));
+            let x = self.splat(s, &x);
+            parts.push((l.path, lanes(s), x));
+        }
+        let acc = self.assemble(ty, parts);
+        self.line(&format!("store {ty} {acc}, ptr {slot}"));
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{skip}:\n"));
+        self.line(&format!("store {ty} zeroinitializer, ptr {slot}"));
+        self.line(&format!("br label %{join}"));
+        self.body.push_str(&format!("{join}:\n"));
+        let r = self.op(&format!("load {ty}, ptr {slot}"));
+        Ok(Val::r(ty, r))
     }
 
     /// A buffer load at per-lane offsets. When every lane that loads reads the same
@@ -423,25 +473,9 @@ impl Fx<'_> {
         let (one, many, join) = (self.label(), self.label(), self.label());
         self.line(&format!("br i1 {diverge}, label %{many}, label %{one}"));
         self.body.push_str(&format!("{one}:\n"));
-        let any = self.any(mask);
-        let (load, skip) = (self.label(), self.label());
-        self.line(&format!("br i1 {any}, label %{load}, label %{skip}"));
-        self.body.push_str(&format!("{load}:\n"));
-        let base = self.buffer_base(g);
-        let mut parts = Vec::new();
-        for l in leaves(self.m, &p.ty)? {
-            let s = scalar(l.scalar)?;
-            let at = self.op(&format!("add i64 {d0}, {}", konst + l.offset));
-            let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {at}"));
-            let x = self.op(&format!("load {s}, ptr {ptr}, align 4"));
-            let x = self.splat(s, &x);
-            parts.push((l.path, lanes(s), x));
-        }
-        let acc = self.assemble(ty, parts);
-        self.line(&format!("store {ty} {acc}, ptr {slot}"));
-        self.line(&format!("br label %{join}"));
-        self.body.push_str(&format!("{skip}:\n"));
-        self.line(&format!("store {ty} zeroinitializer, ptr {slot}"));
+        let at = self.op(&format!("add i64 {d0}, {konst}"));
+        let v = self.load_once(p, ty, g, &at, mask)?;
+        self.line(&format!("store {}, ptr {slot}", v.typed()?));
         self.line(&format!("br label %{join}"));
         self.body.push_str(&format!("{many}:\n"));
         let stride = match p.root {
@@ -459,7 +493,13 @@ impl Fx<'_> {
             self.line(&format!("br label %{join}"));
             self.body.push_str(&format!("{scattered}:\n"));
         }
-        let v = self.gather(p, ty, mask)?;
+        let v = match self.row_plan(p) {
+            Some(rows) => {
+                let x = self.rows_load(g, konst, d, &d0, mask, &rows);
+                Val::r(ty, self.assemble(ty, x))
+            }
+            None => self.gather(p, ty, mask)?,
+        };
         self.line(&format!("store {}, ptr {slot}", v.typed()?));
         self.line(&format!("br label %{join}"));
         self.body.push_str(&format!("{join}:\n"));
@@ -509,6 +549,98 @@ impl Fx<'_> {
         let any = self.any(&bad);
         let ok = self.op(&format!("xor i1 {any}, true"));
         (ok, base0)
+    }
+
+    /// How the lanes' scattered elements of a place read as rows: `None` for a scalar (one
+    /// gather is the cheapest there), for leaves that are not 32-bit words, or where the
+    /// words the leaves span are mostly not leaves.
+    fn row_plan(&self, p: &Place) -> Option<Rows> {
+        let ls = leaves(self.m, &p.ty).ok()?;
+        if ls.len() < 2 {
+            return None;
+        }
+        let mut out = Vec::with_capacity(ls.len());
+        for l in ls {
+            let s = scalar(l.scalar).ok()?;
+            if s == "i1" || l.offset % 4 != 0 {
+                return None;
+            }
+            out.push((l.path, s, l.offset / 4));
+        }
+        let lo = out.iter().map(|l| l.2).min()?;
+        let n = out.iter().map(|l| l.2).max()? + 1 - lo;
+        if n > 2 * out.len() as u64 || n * u64::from(super::types::W) > 512 {
+            return None;
+        }
+        Some(Rows { lo, n, leaves: out })
+    }
+
+    /// Loads each lane's words `lo..lo + n` of its element with one vector load (a lane
+    /// that is off reads the first running lane's element, `d0`, which is in bounds) and
+    /// transposes the rows into the leaves, for `assemble`. A gather of W lanes costs the
+    /// same whatever its mask (2.6 ns on the AMD EPYC of BENCHMARKS.md), so a struct of m
+    /// words cost m of them (up to 64 for a BVH node's two records), where this costs W loads
+    /// and the shuffles.
+    fn rows_load(
+        &mut self,
+        g: usize,
+        konst: u64,
+        d: &str,
+        d0: &str,
+        mask: &str,
+        plan: &Rows,
+    ) -> Vec<(Vec<u32>, String, String)> {
+        let w = u64::from(super::types::W);
+        let base = self.buffer_base(g);
+        let row_ty = format!("<{} x i32>", plan.n);
+        let mut level = Vec::with_capacity(w as usize);
+        for k in 0..w {
+            let dk = self.op(&format!("extractelement {} {d}, i32 {k}", lanes("i64")));
+            let on = self.op(&format!("extractelement {} {mask}, i32 {k}", Fx::mask_ty()));
+            let dk = self.op(&format!("select i1 {on}, i64 {dk}, i64 {d0}"));
+            let off = self.op(&format!("add i64 {dk}, {}", konst + 4 * plan.lo));
+            let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {off}"));
+            level.push(self.op(&format!("load {row_ty}, ptr {ptr}, align 4")));
+        }
+        // W rows (a power of two) of n words: one vector of W * n words, nothing padded.
+        let (all, len) = self.concat(level, plan.n);
+        self.pick_leaves(
+            &format!("<{len} x i32>"),
+            &all,
+            plan.n,
+            plan.lo,
+            &plan.leaves,
+        )
+    }
+
+    /// Each leaf's lanes out of `all` (of type `vt`), which holds lane k's words from
+    /// `lo` on at `k * m`: the leaves, for `assemble`.
+    fn pick_leaves(
+        &mut self,
+        vt: &str,
+        all: &str,
+        m: u64,
+        lo: u64,
+        leaves: &[(Vec<u32>, &'static str, u64)],
+    ) -> Vec<(Vec<u32>, String, String)> {
+        let mut parts = Vec::with_capacity(leaves.len());
+        for (path, s, word) in leaves {
+            let pick: Vec<String> = (0..u64::from(super::types::W))
+                .map(|k| format!("i32 {}", k * m + word - lo))
+                .collect();
+            let x = self.op(&format!(
+                "shufflevector {vt} {all}, {vt} poison, {} <{}>",
+                lanes("i32"),
+                pick.join(", ")
+            ));
+            let x = if *s == "i32" {
+                x
+            } else {
+                self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
+            };
+            parts.push((path.clone(), lanes(s), x));
+        }
+        parts
     }
 
     /// How consecutive lanes of a place read as one wide vector of 32-bit words: `m` words
@@ -581,23 +713,7 @@ impl Fx<'_> {
         let wide = self.op(&format!(
             "call {vt} @llvm.masked.load.v{n}i32.p0(ptr {ptr}, i32 4, {mty} {e}, {vt} zeroinitializer)"
         ));
-        let mut parts = Vec::with_capacity(plan.leaves.len());
-        for (path, s, word) in &plan.leaves {
-            let pick: Vec<String> = (0..w)
-                .map(|k| format!("i32 {}", word + k * plan.m))
-                .collect();
-            let x = self.op(&format!(
-                "shufflevector {vt} {wide}, {vt} poison, {} <{}>",
-                lanes("i32"),
-                pick.join(", ")
-            ));
-            let x = if *s == "i32" {
-                x
-            } else {
-                self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
-            };
-            parts.push((path.clone(), lanes(s), x));
-        }
+        let parts = self.pick_leaves(&vt, &wide, plan.m, 0, &plan.leaves);
         self.assemble(ty, parts)
     }
 
@@ -618,26 +734,10 @@ impl Fx<'_> {
             };
             level.push(x);
         }
-        let mut len = w;
-        while level.len() > 1 {
-            if level.len() % 2 == 1 {
-                level.push("poison".to_string());
-            }
-            let ids: Vec<String> = (0..2 * len).map(|j| format!("i32 {j}")).collect();
-            let mut next = Vec::with_capacity(level.len() / 2);
-            for pair in level.chunks(2) {
-                next.push(self.op(&format!(
-                    "shufflevector <{len} x i32> {}, <{len} x i32> {}, <{} x i32> <{}>",
-                    pair[0],
-                    pair[1],
-                    2 * len,
-                    ids.join(", ")
-                )));
-            }
-            level = next;
-            len *= 2;
+        if level.is_empty() {
+            return Err("a store of no leaves".into());
         }
-        let joined = level.pop().ok_or("a store of no leaves")?;
+        let (joined, len) = self.concat(level, w);
         let place: Vec<String> = (0..n)
             .map(|j| {
                 let (k, word) = (j / plan.m, j % plan.m);
@@ -661,6 +761,32 @@ impl Fx<'_> {
             "call void @llvm.masked.store.v{n}i32.p0({vt} {wide}, ptr {ptr}, i32 4, {mty} {e})"
         ));
         Ok(())
+    }
+
+    /// Vectors of `len` words each (at least one), concatenated pairwise into one vector
+    /// of `len * P` words, P the next power of two of their count (the padding poison):
+    /// the vector and its length.
+    fn concat(&mut self, mut level: Vec<String>, len: u64) -> (String, u64) {
+        let mut len = len;
+        while level.len() > 1 {
+            if level.len() % 2 == 1 {
+                level.push("poison".to_string());
+            }
+            let ids: Vec<String> = (0..2 * len).map(|j| format!("i32 {j}")).collect();
+            let mut next = Vec::with_capacity(level.len() / 2);
+            for pair in level.chunks(2) {
+                next.push(self.op(&format!(
+                    "shufflevector <{len} x i32> {}, <{len} x i32> {}, <{} x i32> <{}>",
+                    pair[0],
+                    pair[1],
+                    2 * len,
+                    ids.join(", ")
+                )));
+            }
+            level = next;
+            len *= 2;
+        }
+        (level.swap_remove(0), len)
     }
 
     /// The leaf at `path` of `value` (the value itself for an empty path).
