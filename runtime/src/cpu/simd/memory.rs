@@ -578,9 +578,9 @@ impl Fx<'_> {
     /// Loads each lane's words `lo..lo + n` of its element with one vector load (a lane
     /// that is off reads the first running lane's element, `d0`, which is in bounds) and
     /// transposes the rows into the leaves, for `assemble`. A gather of W lanes costs the
-    /// same whatever its mask (2.6 ns on the AMD EPYC of BENCHMARKS.md), so a struct of m
-    /// words cost m of them (up to 64 for a BVH node's two records), where this costs W loads
-    /// and the shuffles.
+    /// same whatever its mask (2.6-3.2 ns on the AMD EPYC of BENCHMARKS.md), so gathering
+    /// a struct of m words costs m of them (up to 64 for a BVH node's two records), where
+    /// this costs W loads and the shuffles.
     fn rows_load(
         &mut self,
         g: usize,
