@@ -2,9 +2,9 @@
 //! buffer binding plus a byte offset per lane, or a local variable (a stack slot holding all
 //! lanes, structure of arrays) plus an index path. Places whose path is the same for every
 //! lane load and store whole registers; others gather and scatter one scalar leaf at a time,
-//! except buffer loads: one load per leaf where every lane reads the same element, one wide
-//! load where the lanes read consecutive elements, and one row per lane, transposed, where
-//! a struct's elements lie apart.
+//! except buffer accesses: a load of one element for every lane is one load per leaf; the
+//! lanes' consecutive elements move with one wide load or store; a struct's elements that
+//! lie apart move as one row per lane, transposed.
 //! Every access is bounds-checked: an out-of-range lane sets the dispatch's error flag and
 //! is masked off, where the host form would panic.
 
