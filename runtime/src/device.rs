@@ -162,6 +162,8 @@ impl Device {
     }
 
     fn open(kind: BackendKind, which: Option<usize>) -> Result<Device> {
+        // A crash in a driver or a vector form says where it happened.
+        crate::crash_report::install();
         let backend: Arc<dyn Backend> = match kind {
             BackendKind::Wgpu => Arc::new(wgpu_backend::WgpuDevice::new(which)?),
             BackendKind::Vulkan => Arc::new(vulkan_backend::VkDevice::new(which)?),

@@ -22,6 +22,8 @@ mod backend;
 mod buffer;
 pub mod cpu;
 mod cpu_backend;
+#[doc(hidden)]
+pub mod crash_report;
 mod device;
 mod disk_cache;
 mod error;

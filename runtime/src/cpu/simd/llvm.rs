@@ -278,7 +278,10 @@ impl Jit {
         let (object, took) = {
             let _one = self.compiling.lock().unwrap_or_else(|e| e.into_inner());
             let start = Instant::now();
-            let object = self.object(&ir);
+            let object = {
+                let _named = crate::crash_report::compiling(name);
+                self.object(&ir)
+            };
             // SAFETY: `atexit` takes a plain C function (if it fails, exit runs without it).
             unsafe { atexit(finish_compiles) };
             (object?, start.elapsed())
@@ -317,6 +320,9 @@ impl Jit {
             addr as usize
         };
         l.linked.insert(key, addr);
+        if let Some(size) = super::perf_map::text_size(object) {
+            crate::crash_report::name_code(addr, size as usize, name);
+        }
         if super::perf_map::enabled() {
             super::perf_map::record(name, addr, object);
         }

@@ -252,7 +252,9 @@ fn probe(k: &CompiledKernel) -> State {
 }
 
 fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
-    std::thread::spawn(move || {
+    // Named, so that a crash report or a profile says which thread LLVM ran on.
+    let build_thread = std::thread::Builder::new().name("cohort-llvm".into());
+    let spawned = build_thread.spawn(move || {
         let r = build(&k, &ir);
         let took = r.as_ref().map_or(std::time::Duration::ZERO, |b| b.1);
         let r = r.map(|b| b.0);
@@ -279,6 +281,8 @@ fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
         kernels.insert(k.id, State::Done(r));
         c.done.notify_all();
     });
+    // As `std::thread::spawn` does: a process that cannot start a thread cannot go on.
+    spawned.expect("a thread for LLVM to compile a vector form on");
 }
 
 /// Compiles (or links from the cache) `k`'s vector form from its IR; with LLVM's time.
