@@ -121,6 +121,54 @@ fn open() -> Result<Jit, String> {
     }
 }
 
+/// `COHORT_CPU_SIMD_TARGET=CPU[:FEATURES]` (LLVM's names: `x86-64-v3`, `skylake-avx512`,
+/// `znver3:+avx2,-avx512f`) compiles vector forms for another x86-64 CPU than this one:
+/// to run the code a machine without AVX-512 (or without AVX2) would run, on this one.
+/// The CPU must be one this machine can run the code of.
+fn target_override() -> Result<Option<(CString, CString)>, String> {
+    let Ok(t) = std::env::var("COHORT_CPU_SIMD_TARGET") else {
+        return Ok(None);
+    };
+    if t.is_empty() {
+        return Ok(None);
+    }
+    let (cpu, features) = t.split_once(':').unwrap_or((&t, ""));
+    let c = |s: &str| {
+        CString::new(s).map_err(|_| format!("COHORT_CPU_SIMD_TARGET={t:?} holds a NUL byte"))
+    };
+    Ok(Some((c(cpu)?, c(features)?)))
+}
+
+/// The relocation model and code model (`LLVMRelocMode`, `LLVMCodeModel`) objects are
+/// emitted with for this library's JIT linker. From LLVM 17 on, LLJIT links ELF x86-64
+/// objects with JITLink, which places all of an object's sections in one allocation:
+/// position-independent code in the default (small) code model, calls into libm through
+/// a GOT. Before, it linked them with RuntimeDyld, whose memory manager maps code and
+/// constants separately, each near its own kind's earlier mappings: they can end up more
+/// than 2 GiB apart, past the small model's 32-bit PC-relative reach, and RuntimeDyld
+/// then truncates the displacement without a word, so that a vector form reads its
+/// constants from a wrong address. The large code model addresses them with 64-bit
+/// absolute relocations (what LLVM's MCJIT uses on x86-64, as `JITDefault`). A library
+/// without `LLVMGetVersion` is older than LLVM 16.
+fn code_model(lib: &Library) -> (i32, i32) {
+    const STATIC: i32 = 1;
+    const PIC: i32 = 2;
+    const DEFAULT: i32 = 0;
+    const LARGE: i32 = 6;
+    let version: Result<unsafe extern "C" fn(*mut u32, *mut u32, *mut u32), _> =
+        sym(lib, "LLVMGetVersion");
+    let major = version.ok().map(|get| {
+        let (mut major, mut minor, mut patch) = (0, 0, 0);
+        // SAFETY: `LLVMGetVersion` writes three unsigned integers.
+        unsafe { get(&mut major, &mut minor, &mut patch) };
+        major
+    });
+    match major {
+        Some(m) if m >= 17 => (PIC, DEFAULT),
+        _ => (STATIC, LARGE),
+    }
+}
+
 fn sym<T: Copy>(lib: &Library, name: &str) -> Result<T, String> {
     let c = format!("{name}\0");
     // SAFETY: the caller's `T` is the C signature of `name`.
@@ -144,15 +192,32 @@ impl Jit {
             }
             let triple =
                 sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetDefaultTargetTriple")?();
-            let cpu = sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetHostCPUName")?();
-            let features =
-                sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetHostCPUFeatures")?();
+            let (cpu_s, features_s) = match target_override()? {
+                Some(t) => t,
+                None => (
+                    CString::from(CStr::from_ptr(
+                        sym::<unsafe extern "C" fn() -> *mut c_char>(&lib, "LLVMGetHostCPUName")?(),
+                    )),
+                    CString::from(CStr::from_ptr(
+                        sym::<unsafe extern "C" fn() -> *mut c_char>(
+                            &lib,
+                            "LLVMGetHostCPUFeatures",
+                        )?(),
+                    )),
+                ),
+            };
+            let (cpu, features) = (cpu_s.as_ptr(), features_s.as_ptr());
+            let (reloc, code_model) = code_model(&lib);
             let target_key = crate::hash64(
                 crate::hash64(
                     crate::hash64(0, name.as_bytes()),
                     CStr::from_ptr(cpu).to_bytes(),
                 ),
-                CStr::from_ptr(features).to_bytes(),
+                &[
+                    CStr::from_ptr(features).to_bytes(),
+                    &[reloc as u8, code_model as u8],
+                ]
+                .concat(),
             );
             let mut target: P = std::ptr::null_mut();
             let mut msg: *mut c_char = std::ptr::null_mut();
@@ -173,9 +238,8 @@ impl Jit {
                 i32,
                 i32,
             ) -> P = sym(&lib, "LLVMCreateTargetMachine")?;
-            // Level 2 (default), position-independent (the JIT links the object anywhere,
-            // calls into libm go through its GOT), code model default.
-            let tm = create_tm(target, triple, cpu, features, 2, 2, 0);
+            // Optimisation level 2 (default); relocation and code model as `code_model` says.
+            let tm = create_tm(target, triple, cpu, features, 2, reloc, code_model);
             let layout_of: unsafe extern "C" fn(P) -> P = sym(&lib, "LLVMCreateTargetDataLayout")?;
             let layout_str: unsafe extern "C" fn(P) -> *mut c_char =
                 sym(&lib, "LLVMCopyStringRepOfTargetData")?;
