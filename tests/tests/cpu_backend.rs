@@ -94,6 +94,46 @@ fn out_of_bounds_is_an_error(d: Device) {
     assert!(stats.gpu_time_ns.is_some(), "dispatches are timed");
 }
 
+/// An index computed in `i32` that can go below zero.
+#[kernel(workgroup = 64)]
+pub fn reads_at_a_signed_offset(
+    #[builtin(global_index)] gi: u32,
+    offsets: &[i32],
+    xs: &[u32],
+    out: &mut [u32],
+) {
+    let i = gi as i32 + offsets[gi as usize];
+    out[gi as usize] = xs[i as usize];
+}
+
+#[test]
+fn an_index_below_zero_is_an_error_in_both_forms() {
+    use cohort::runtime::cpu::simd::Forms;
+    for forms in [Forms::Host, Forms::Vector] {
+        let d = Device::cpu_with(forms).unwrap();
+        let xs: Vec<u32> = (0..64).map(|i| 100 + i).collect();
+        let xs_b = d.upload(&xs).unwrap();
+        let out = d.alloc::<u32>(64).unwrap();
+        let mut offsets = vec![0i32; 64];
+        offsets[5] = -5;
+        let offsets_b = d.upload(&offsets).unwrap();
+        reads_at_a_signed_offset::launch(&d, 64u32, &offsets_b, &xs_b, &out).unwrap();
+        let mut want = xs.clone();
+        want[5] = 100;
+        assert_eq!(d.read(&out).unwrap(), want, "{forms:?}");
+        // Lane 9 reads element -1: four bytes before the buffer, whose end (offset 0) is
+        // in bounds.
+        offsets[9] = -10;
+        let offsets_b = d.upload(&offsets).unwrap();
+        let err = reads_at_a_signed_offset::launch(&d, 64u32, &offsets_b, &xs_b, &out).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("reads_at_a_signed_offset") && msg.contains("index out of bounds"),
+            "{forms:?}: {msg}"
+        );
+    }
+}
+
 /// A lane that panics between barriers, while the others of its workgroup wait parked on
 /// their own stacks: they are unwound, and the dispatch fails cleanly.
 #[kernel(workgroup = 64)]

@@ -256,13 +256,16 @@ impl Fx<'_> {
                 let end = konst + byte_size(self.m, &p.ty);
                 let c = match dynamic {
                     Some(d) => {
+                        // `d <= size - end`, unsigned, where `end <= size`: a negative offset
+                        // (a signed index below zero) is huge unsigned and fails, where
+                        // `d + end <= size` would wrap and pass.
                         let v64 = lanes("i64");
-                        let e = self.op(&format!(
-                            "add {v64} {d}, {}",
-                            splat_const("i64", &end.to_string())
-                        ));
-                        let s = self.splat("i64", &size);
-                        self.op(&format!("icmp ule {v64} {e}, {s}"))
+                        let fits = self.op(&format!("icmp ule i64 {end}, {size}"));
+                        let room = self.op(&format!("sub i64 {size}, {end}"));
+                        let r = self.splat("i64", &room);
+                        let c = self.op(&format!("icmp ule {v64} {d}, {r}"));
+                        let f = self.splat("i1", &fits);
+                        self.and(&c, &f)
                     }
                     None => {
                         let c = self.op(&format!("icmp ule i64 {end}, {size}"));
@@ -577,7 +580,8 @@ impl Fx<'_> {
         let mut out = Vec::with_capacity(ls.len());
         for l in ls {
             let s = scalar(l.scalar).ok()?;
-            if s == "i1" || l.offset % 4 != 0 {
+            // Rows move 32-bit words: a bool, a 64-bit scalar or an unaligned leaf gathers.
+            if !matches!(s, "i32" | "float") || l.offset % 4 != 0 {
                 return None;
             }
             out.push((l.path, s, l.offset / 4));
