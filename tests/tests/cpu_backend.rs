@@ -221,26 +221,38 @@ fn only_waiting_operations_make_a_kernel_synchronise() {
     assert!(synchronises(&divergent_subgroups::build(&subgroups)));
 }
 
+/// Two vectors: a struct of eight words, which the vector form moves as rows where the
+/// lanes' elements lie apart.
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable, GpuType)]
+#[repr(C)]
+pub struct Pair {
+    pub a: Vec4,
+    pub b: Vec4,
+}
+
 /// Reads and writes at `order[gi]` under a divergent condition: where a block's lanes
 /// land on consecutive elements the vector form moves them with one wide masked load or
 /// store, elsewhere it gathers and scatters; both must touch exactly the elements the
-/// host form touches. `xs[j].y` reads one member of each element (a sparse wide load);
-/// scattered `xs[j]` are read as one row per lane, transposed; `xs[3]` is one element for
-/// every lane.
+/// host form touches. Scattered `xs[j]` and `out2[j]` (eight words) move as one row per
+/// lane, transposed; `xs[j].b` (four) gathers; `xs[j].a.y` reads one member of each
+/// element (a sparse wide load); `xs[3]` is one element for every lane.
 #[kernel(workgroup = 64)]
 pub fn permuted_copies(
     #[builtin(global_index)] gi: u32,
     order: &[u32],
-    xs: &[Vec4],
+    xs: &[Pair],
     ys: &[u32],
-    out4: &mut [Vec4],
+    out2: &mut [Pair],
     out1: &mut [u32],
 ) {
     let j = order[gi as usize] as usize;
     if j % 3 != 1 {
         let v = xs[j];
-        out4[j] = v * 2.0 + Vec4::splat(ys[j] as f32) + xs[3];
-        out1[j] = ys[j] + xs[j].y.to_bits();
+        out2[j] = Pair {
+            a: v.a * 2.0 + Vec4::splat(ys[j] as f32) + xs[3].a,
+            b: xs[j].b - v.a,
+        };
+        out1[j] = ys[j] + xs[j].a.y.to_bits();
     }
 }
 
@@ -266,30 +278,40 @@ fn orders(n: u32) -> Vec<(&'static str, Vec<u32>)> {
 #[test]
 fn consecutive_and_scattered_accesses_touch_what_the_host_form_touches() {
     let n = 1024u32;
-    let xs: Vec<Vec4> = (0..n)
-        .map(|i| Vec4::new(i as f32, -(i as f32), 0.5 * i as f32, 1.0e6 + i as f32))
+    let xs: Vec<Pair> = (0..n)
+        .map(|i| Pair {
+            a: Vec4::new(i as f32, -(i as f32), 0.5 * i as f32, 1.0e6 + i as f32),
+            b: Vec4::new(3.0 * i as f32, 0.25, -1.5 * i as f32, i as f32 * i as f32),
+        })
         .collect();
     let ys: Vec<u32> = (0..n).map(|i| i * 7 + 3).collect();
+    let sentinel = Pair {
+        a: Vec4::splat(-7.0),
+        b: Vec4::splat(-9.0),
+    };
     for (what, order) in orders(n) {
         // Untouched elements keep their sentinel: a store must not write masked-off lanes.
-        let mut want4 = vec![Vec4::splat(-7.0); n as usize];
+        let mut want2 = vec![sentinel; n as usize];
         let mut want1 = vec![0xdead_beefu32; n as usize];
         for &j in &order {
             let j = j as usize;
             if j % 3 != 1 {
-                want4[j] = xs[j] * 2.0 + Vec4::splat(ys[j] as f32) + xs[3];
-                want1[j] = ys[j] + xs[j].y.to_bits();
+                want2[j] = Pair {
+                    a: xs[j].a * 2.0 + Vec4::splat(ys[j] as f32) + xs[3].a,
+                    b: xs[j].b - xs[j].a,
+                };
+                want1[j] = ys[j] + xs[j].a.y.to_bits();
             }
         }
         for d in common::devices() {
             let order_b = d.upload(&order).unwrap();
             let xs_b = d.upload(&xs).unwrap();
             let ys_b = d.upload(&ys).unwrap();
-            let out4 = d.upload(&vec![Vec4::splat(-7.0); n as usize]).unwrap();
+            let out2 = d.upload(&vec![sentinel; n as usize]).unwrap();
             let out1 = d.upload(&vec![0xdead_beefu32; n as usize]).unwrap();
-            permuted_copies::launch(&d, n, &order_b, &xs_b, &ys_b, &out4, &out1).unwrap();
+            permuted_copies::launch(&d, n, &order_b, &xs_b, &ys_b, &out2, &out1).unwrap();
             let name = d.info().adapter_name.clone();
-            assert_eq!(d.read(&out4).unwrap(), want4, "{what}, {name}");
+            assert_eq!(d.read(&out2).unwrap(), want2, "{what}, {name}");
             assert_eq!(d.read(&out1).unwrap(), want1, "{what}, {name}");
         }
     }

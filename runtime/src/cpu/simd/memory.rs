@@ -11,7 +11,12 @@
 use naga::{Handle, ScalarKind, TypeInner};
 
 use super::lower::{Fx, Val};
+use super::rows::RowsAt;
 use super::types::{byte_size, iota, lanes, leaves, scalar, splat_const, value_type, Lowering};
+
+/// Bytes of the constant that a load at one address for all lanes reads where no lane
+/// loads ([`Fx::load_once`]).
+const ZEROS: u64 = 4096;
 
 #[derive(Clone, Debug)]
 pub enum Idx {
@@ -44,23 +49,6 @@ pub enum Root {
 pub struct Wide {
     m: u64,
     leaves: Vec<(Vec<u32>, &'static str, u64)>,
-}
-
-/// A plan for reading the lanes' scattered elements of a place as rows (`Fx::row_plan`):
-/// words `lo..lo + n` of each element, and each leaf's (path, scalar, word).
-pub struct Rows {
-    lo: u64,
-    n: u64,
-    leaves: Vec<(Vec<u32>, &'static str, u64)>,
-}
-
-/// Where the lanes' elements of a scattered access lie: binding `g`, byte offset `konst`
-/// plus each lane's `d` (`<W x i64>`), `d0` the first running lane's.
-pub struct RowsAt<'a> {
-    g: usize,
-    konst: u64,
-    d: &'a str,
-    d0: &'a str,
 }
 
 /// Where lane 0's element of a wide access starts: binding `g`, byte offset `konst` plus
@@ -301,7 +289,7 @@ impl Fx<'_> {
         ));
         self.op(&format!("load {ty}, ptr {p}, !invariant.load !0"))
     }
-    fn buffer_base(&mut self, g: usize) -> String {
+    pub(super) fn buffer_base(&mut self, g: usize) -> String {
         self.env_field(g, 0, "ptr")
     }
     fn buffer_size(&mut self, g: usize) -> String {
@@ -432,32 +420,30 @@ impl Fx<'_> {
 
     /// A buffer load at the same byte offset `at` (an `i64` operand) in every lane: one
     /// scalar load per leaf, broadcast, where a gather from the same address would cost a
-    /// gather per leaf; zero where no lane loads (then the offset may be out of bounds).
+    /// gather per leaf. Where no lane loads (then `at` may be out of bounds) it reads
+    /// [`ZEROS`] instead: a select of the address rather than a branch around the loads,
+    /// whose blocks and stack slot, at every such access, cost LLVM a fifth more time to
+    /// compile the extend kernel (BENCHMARKS.md). A place larger than `ZEROS` gathers.
     fn load_once(&mut self, p: &Place, ty: &str, g: usize, at: &str, mask: &str) -> Lowering<Val> {
-        let slot = self.alloca(ty);
+        if byte_size(self.m, &p.ty) > ZEROS {
+            return self.gather(p, ty, mask);
+        }
         let any = self.any(mask);
-        let (load, skip, join) = (self.label(), self.label(), self.label());
-        self.line(&format!("br i1 {any}, label %{load}, label %{skip}"));
-        self.body.push_str(&format!("{load}:\n"));
         let base = self.buffer_base(g);
+        let real = self.op(&format!("getelementptr i8, ptr {base}, i64 {at}"));
+        self.declare(&format!(
+            "@cohort_zeros = private unnamed_addr constant [{ZEROS} x i8] zeroinitializer, align 64"
+        ));
+        let from = self.op(&format!("select i1 {any}, ptr {real}, ptr @cohort_zeros"));
         let mut parts = Vec::new();
         for l in leaves(self.m, &p.ty)? {
             let s = scalar(l.scalar)?;
-            let off = self.op(&format!("add i64 {at}, {}", l.offset));
-            let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {off}"));
+            let ptr = self.op(&format!("getelementptr i8, ptr {from}, i64 {}", l.offset));
             let x = self.op(&format!("load {s}, ptr {ptr}, align 4"));
             let x = self.splat(s, &x);
             parts.push((l.path, lanes(s), x));
         }
-        let acc = self.assemble(ty, parts);
-        self.line(&format!("store {ty} {acc}, ptr {slot}"));
-        self.line(&format!("br label %{join}"));
-        self.body.push_str(&format!("{skip}:\n"));
-        self.line(&format!("store {ty} zeroinitializer, ptr {slot}"));
-        self.line(&format!("br label %{join}"));
-        self.body.push_str(&format!("{join}:\n"));
-        let r = self.op(&format!("load {ty}, ptr {slot}"));
-        Ok(Val::r(ty, r))
+        Ok(Val::r(ty, self.assemble(ty, parts)))
     }
 
     /// A buffer load at per-lane offsets. When every lane that loads reads the same
@@ -567,77 +553,6 @@ impl Fx<'_> {
         let any = self.any(&bad);
         let ok = self.op(&format!("xor i1 {any}, true"));
         (ok, base0)
-    }
-
-    /// How the lanes' scattered elements of a place read as rows: `None` for a scalar (one
-    /// gather is the cheapest there), for leaves that are not 32-bit words, or where the
-    /// words the leaves span are mostly not leaves.
-    fn row_plan(&self, p: &Place) -> Option<Rows> {
-        let ls = leaves(self.m, &p.ty).ok()?;
-        if ls.len() < 2 {
-            return None;
-        }
-        let mut out = Vec::with_capacity(ls.len());
-        for l in ls {
-            let s = scalar(l.scalar).ok()?;
-            // Rows move 32-bit words: a bool, a 64-bit scalar or an unaligned leaf gathers.
-            if !matches!(s, "i32" | "float") || l.offset % 4 != 0 {
-                return None;
-            }
-            out.push((l.path, s, l.offset / 4));
-        }
-        let lo = out.iter().map(|l| l.2).min()?;
-        let n = out.iter().map(|l| l.2).max()? + 1 - lo;
-        if n > 2 * out.len() as u64 || n * u64::from(super::types::W) > 512 {
-            return None;
-        }
-        Some(Rows { lo, n, leaves: out })
-    }
-
-    /// Lane `k`'s running bit in `mask` and the address of word `lo` of its element (of
-    /// the first running lane's where lane `k` is off, so that it is in bounds).
-    fn row_pointer(&mut self, at: &RowsAt, mask: &str, k: u64, lo: u64) -> (String, String) {
-        let on = self.op(&format!("extractelement {} {mask}, i32 {k}", Fx::mask_ty()));
-        let dk = self.op(&format!(
-            "extractelement {} {}, i32 {k}",
-            lanes("i64"),
-            at.d
-        ));
-        let dk = self.op(&format!("select i1 {on}, i64 {dk}, i64 {}", at.d0));
-        let off = self.op(&format!("add i64 {dk}, {}", at.konst + 4 * lo));
-        let base = self.buffer_base(at.g);
-        let ptr = self.op(&format!("getelementptr i8, ptr {base}, i64 {off}"));
-        (on, ptr)
-    }
-
-    /// Loads each lane's words `lo..lo + n` of its element with one vector load (a lane
-    /// that is off reads the first running lane's element, `d0`, which is in bounds) and
-    /// transposes the rows into the leaves, for `assemble`. A gather of W lanes costs the
-    /// same whatever its mask (2.6-3.2 ns on the AMD EPYC of BENCHMARKS.md), so gathering
-    /// a struct of m words costs m of them (up to 64 for a BVH node's two records), where
-    /// this costs W loads and the shuffles.
-    fn rows_load(
-        &mut self,
-        at: &RowsAt,
-        mask: &str,
-        plan: &Rows,
-    ) -> Vec<(Vec<u32>, String, String)> {
-        let w = u64::from(super::types::W);
-        let row_ty = format!("<{} x i32>", plan.n);
-        let mut level = Vec::with_capacity(w as usize);
-        for k in 0..w {
-            let (_, ptr) = self.row_pointer(at, mask, k, plan.lo);
-            level.push(self.op(&format!("load {row_ty}, ptr {ptr}, align 4")));
-        }
-        // W rows (a power of two) of n words: one vector of W * n words, nothing padded.
-        let (all, len) = self.concat(level, plan.n);
-        self.pick_leaves(
-            &format!("<{len} x i32>"),
-            &all,
-            plan.n,
-            plan.lo,
-            &plan.leaves,
-        )
     }
 
     /// Each leaf's lanes out of `all` (of type `vt`), which holds lane k's words from
@@ -802,7 +717,7 @@ impl Fx<'_> {
     /// Vectors of `len` words each (at least one), concatenated pairwise into one vector
     /// of `len * P` words, P the next power of two of their count (the padding poison):
     /// the vector and its length.
-    fn concat(&mut self, mut level: Vec<String>, len: u64) -> (String, u64) {
+    pub(super) fn concat(&mut self, mut level: Vec<String>, len: u64) -> (String, u64) {
         let mut len = len;
         while level.len() > 1 {
             if level.len() % 2 == 1 {
@@ -826,7 +741,7 @@ impl Fx<'_> {
     }
 
     /// The leaf at `path` of `value` (the value itself for an empty path).
-    fn leaf_of(&mut self, value: &Val, path: &[u32]) -> Lowering<String> {
+    pub(super) fn leaf_of(&mut self, value: &Val, path: &[u32]) -> Lowering<String> {
         if path.is_empty() {
             return Ok(value.v()?.to_string());
         }
@@ -931,47 +846,6 @@ impl Fx<'_> {
             Some(plan) => self.rows_store(at, mask, &plan, value),
             None => self.scatter(p, value, mask),
         }
-    }
-
-    /// Stores each running lane's leaves of `value` as one row, words `lo..lo + n` of its
-    /// element, with one masked store per lane in lane order (so that where two lanes
-    /// write one element the higher lane's value stays, as in the host form); words of
-    /// the span that hold no leaf are left as they are.
-    fn rows_store(&mut self, at: &RowsAt, mask: &str, plan: &Rows, value: &Val) -> Lowering<()> {
-        let w = u64::from(super::types::W);
-        let (all, len) = self.leaves_as_words(value, &plan.leaves)?;
-        let n = plan.n;
-        let at_word = |word: u64| plan.leaves.iter().position(|l| l.2 - plan.lo == word);
-        let words: Vec<String> = (0..n)
-            .map(|j| format!("i1 {}", at_word(j).is_some()))
-            .collect();
-        let row_ty = format!("<{n} x i32>");
-        let mty = format!("<{n} x i1>");
-        self.declare(&format!(
-            "declare void @llvm.masked.store.v{n}i32.p0({row_ty}, ptr, i32, {mty})"
-        ));
-        for k in 0..w {
-            let pick: Vec<String> = (0..n)
-                .map(|j| match at_word(j) {
-                    Some(leaf) => format!("i32 {}", leaf as u64 * w + k),
-                    None => "i32 undef".to_string(),
-                })
-                .collect();
-            let row = self.op(&format!(
-                "shufflevector <{len} x i32> {all}, <{len} x i32> poison, <{n} x i32> <{}>",
-                pick.join(", ")
-            ));
-            let (on, ptr) = self.row_pointer(at, mask, k, plan.lo);
-            let ons = self.op(&format!("insertelement {mty} poison, i1 {on}, i32 0"));
-            let ons = self.op(&format!(
-                "shufflevector {mty} {ons}, {mty} poison, <{n} x i32> zeroinitializer"
-            ));
-            let m = self.op(&format!("and {mty} {ons}, <{}>", words.join(", ")));
-            self.line(&format!(
-                "call void @llvm.masked.store.v{n}i32.p0({row_ty} {row}, ptr {ptr}, i32 4, {mty} {m})"
-            ));
-        }
-        Ok(())
     }
 
     /// Stores each scalar leaf with a masked scatter.

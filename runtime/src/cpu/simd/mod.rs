@@ -12,6 +12,7 @@ mod llvm;
 mod lower;
 mod memory;
 mod perf_map;
+mod rows;
 mod types;
 
 use std::collections::HashMap;
