@@ -256,6 +256,46 @@ pub fn permuted_copies(
     }
 }
 
+/// Four invocations in turn store to one element, a struct moved as rows in the vector
+/// form: the element keeps the last one's value, as in the host form, which runs a
+/// workgroup's invocations in order (on a GPU the winner is unspecified).
+#[kernel(workgroup = 64)]
+pub fn shared_stores(#[builtin(global_index)] gi: u32, xs: &[Pair], out2: &mut [Pair]) {
+    let v = xs[gi as usize];
+    out2[(gi / 4) as usize] = Pair {
+        a: v.a + Vec4::splat(gi as f32),
+        b: v.b,
+    };
+}
+
+#[test]
+fn lanes_that_store_to_one_element_leave_the_last_ones_value_in_both_forms() {
+    use cohort::runtime::cpu::simd::Forms;
+    let n = 256u32;
+    let xs: Vec<Pair> = (0..n)
+        .map(|i| Pair {
+            a: Vec4::new(i as f32, 2.0 * i as f32, -(i as f32), 0.5),
+            b: Vec4::splat(1.0 + i as f32),
+        })
+        .collect();
+    let want: Vec<Pair> = (0..n / 4)
+        .map(|e| {
+            let last = 4 * e + 3;
+            Pair {
+                a: xs[last as usize].a + Vec4::splat(last as f32),
+                b: xs[last as usize].b,
+            }
+        })
+        .collect();
+    for forms in [Forms::Host, Forms::Vector] {
+        let d = Device::cpu_with(forms).unwrap();
+        let xs_b = d.upload(&xs).unwrap();
+        let out2 = d.alloc::<Pair>((n / 4) as usize).unwrap();
+        shared_stores::launch(&d, n, &xs_b, &out2).unwrap();
+        assert_eq!(d.read(&out2).unwrap(), want, "{forms:?}");
+    }
+}
+
 /// The orders `permuted_copies` runs with, over `n` (a multiple of 16) elements: blocks of
 /// eight in place, blocks moved to the other half of their sixteen (consecutive, another
 /// base), halves swapped within a block (not consecutive), reversed, and a shuffle.
