@@ -17,9 +17,9 @@ extern "C" fn read_unmapped() -> u64 {
     unsafe { std::ptr::read_volatile(std::ptr::dangling::<u64>()) }
 }
 
-/// Runs test `name` of this binary in a child with `CHILD` set, which must still die of
-/// SIGSEGV (the report defers to the handler before it); the child's stderr.
-fn crash_child(name: &str) -> String {
+/// Runs test `name` of this binary in a child with `CHILD` set, which must die of signal
+/// `signal` (the report defers to the handler before it); the child's stderr.
+fn crash_child(name: &str, signal: i32) -> String {
     let out = Command::new(std::env::current_exe().unwrap())
         .args(["--exact", name, "--nocapture", "--test-threads", "1"])
         .env(CHILD, "1")
@@ -27,23 +27,35 @@ fn crash_child(name: &str) -> String {
         .unwrap();
     use std::os::unix::process::ExitStatusExt as _;
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.signal(), Some(libc::SIGSEGV), "{err}");
+    assert_eq!(out.status.signal(), Some(signal), "{err}");
     err
+}
+
+/// Runs `f` on a thread named `name` with a stack of `stack` bytes, after installing the
+/// handler (in the child).
+fn crash_in_thread(name: &str, stack: usize, f: fn()) {
+    crash_report::install();
+    std::thread::Builder::new()
+        .name(name.into())
+        .stack_size(stack)
+        .spawn(f)
+        .unwrap()
+        .join()
+        .ok();
 }
 
 #[test]
 fn an_unmapped_read_is_reported_with_its_thread_and_mapping() {
     if std::env::var_os(CHILD).is_some() {
-        crash_report::install();
-        std::thread::Builder::new()
-            .name("crashing-one".into())
-            .spawn(|| read_unmapped())
-            .unwrap()
-            .join()
-            .ok();
+        crash_in_thread("crashing-one", 1 << 20, || {
+            read_unmapped();
+        });
         return;
     }
-    let err = crash_child("an_unmapped_read_is_reported_with_its_thread_and_mapping");
+    let err = crash_child(
+        "an_unmapped_read_is_reported_with_its_thread_and_mapping",
+        libc::SIGSEGV,
+    );
     assert!(
         err.contains("cohort: fatal SIGSEGV (address 0x8, si_code 1) in thread `crashing-one`"),
         "{err}"
@@ -68,7 +80,7 @@ fn a_fault_in_named_code_names_the_kernel() {
         read_unmapped();
         return;
     }
-    let err = crash_child("a_fault_in_named_code_names_the_kernel");
+    let err = crash_child("a_fault_in_named_code_names_the_kernel", libc::SIGSEGV);
     assert!(
         err.contains(": the CPU vector form of `some_kernel` + 0x"),
         "{err}"
@@ -77,4 +89,36 @@ fn a_fault_in_named_code_names_the_kernel() {
         err.contains("LLVM was compiling the vector form of `another_kernel`"),
         "{err}"
     );
+}
+
+/// Recurses until the stack runs out (the test on `n` only keeps the compiler from
+/// seeing that).
+#[inline(never)]
+fn deeper(n: u64) -> u64 {
+    if std::hint::black_box(n) == u64::MAX {
+        return 0;
+    }
+    let pad = std::hint::black_box([n; 64]);
+    deeper(n + 1) + pad[(n % 64) as usize]
+}
+
+#[test]
+fn a_stack_overflow_is_reported_and_rust_still_says_so() {
+    if std::env::var_os(CHILD).is_some() {
+        // The handler runs on the thread's alternate stack, the overflowed one being full.
+        crash_in_thread("too-deep", 256 * 1024, || {
+            deeper(0);
+        });
+        return;
+    }
+    // Rust's handler, which runs next, names the overflow and aborts.
+    let err = crash_child(
+        "a_stack_overflow_is_reported_and_rust_still_says_so",
+        libc::SIGABRT,
+    );
+    assert!(
+        err.contains("cohort: fatal SIGSEGV") && err.contains("in thread `too-deep`"),
+        "{err}"
+    );
+    assert!(err.contains("has overflowed its stack"), "{err}");
 }
