@@ -386,9 +386,9 @@ impl Jit {
         l.linked.insert(key, addr);
         if let Some(size) = super::perf_map::text_size(object) {
             crate::crash_report::name_code(addr, size as usize, name);
-        }
-        if super::perf_map::enabled() {
-            super::perf_map::record(name, addr, object);
+            if super::perf_map::enabled() {
+                super::perf_map::record(name, addr, size);
+            }
         }
         Ok(addr)
     }

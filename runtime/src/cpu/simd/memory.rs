@@ -575,11 +575,7 @@ impl Fx<'_> {
                 lanes("i32"),
                 pick.join(", ")
             ));
-            let x = if *s == "i32" {
-                x
-            } else {
-                self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
-            };
+            let x = self.words_as(&x, s);
             parts.push((path.clone(), lanes(s), x));
         }
         parts
@@ -689,6 +685,22 @@ impl Fx<'_> {
         Ok(())
     }
 
+    /// A leaf's lanes (scalar `s`, 32 bits) as `<W x i32>`, for moving words.
+    pub(super) fn as_words(&mut self, x: &str, s: &str) -> String {
+        if s == "i32" {
+            return x.to_string();
+        }
+        self.op(&format!("bitcast {} {x} to {}", lanes(s), lanes("i32")))
+    }
+
+    /// [`Fx::as_words`] undone: `<W x i32>` as lanes of scalar `s`.
+    pub(super) fn words_as(&mut self, x: &str, s: &str) -> String {
+        if s == "i32" {
+            return x.to_string();
+        }
+        self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
+    }
+
     /// The `leaves` of `value`, each as `<W x i32>`, in one vector of `W * P` words (P the
     /// next power of two of their count, the padding poison): leaf j's lane k at j * W + k.
     /// The vector and its length.
@@ -697,16 +709,10 @@ impl Fx<'_> {
         value: &Val,
         leaves: &[(Vec<u32>, &'static str, u64)],
     ) -> Lowering<(String, u64)> {
-        let i32v = lanes("i32");
         let mut level = Vec::with_capacity(leaves.len());
         for (path, s, _) in leaves {
             let x = self.leaf_of(value, path)?;
-            let x = if *s == "i32" {
-                x
-            } else {
-                self.op(&format!("bitcast {} {x} to {i32v}", lanes(s)))
-            };
-            level.push(x);
+            level.push(self.as_words(&x, s));
         }
         if level.is_empty() {
             return Err("a store of no leaves".into());

@@ -13,13 +13,10 @@ pub fn enabled() -> bool {
     *ON.get_or_init(|| std::env::var("COHORT_CPU_SIMD_PERF_MAP").is_ok_and(|v| v == "1"))
 }
 
-/// Appends `addr size name` for the code of `object` (an ELF object file whose `.text`
-/// section the JIT placed at `addr`, the entry being its first function). Called under
-/// the JIT's linker lock, so lines from different threads never interleave.
-pub fn record(name: &str, addr: usize, object: &[u8]) {
-    let Some(size) = text_size(object) else {
-        return;
-    };
+/// Appends `addr size name` for a kernel's code: the `.text` section (of `size` bytes,
+/// from [`text_size`]) that the JIT placed at `addr`, the entry being its first function.
+/// Called under the JIT's linker lock, so lines from different threads never interleave.
+pub fn record(name: &str, addr: usize, size: u64) {
     let path = format!("/tmp/perf-{}.map", std::process::id());
     // A profile without names is all that a failure here costs.
     if let Ok(mut f) = std::fs::OpenOptions::new()

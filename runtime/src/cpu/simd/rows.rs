@@ -109,12 +109,7 @@ impl Fx<'_> {
                 let x = words[(word - plan.lo) as usize]
                     .clone()
                     .expect("the chunk of every leaf's word is transposed");
-                let x = if *s == "i32" {
-                    x
-                } else {
-                    self.op(&format!("bitcast {} {x} to {}", lanes("i32"), lanes(s)))
-                };
-                (path.clone(), lanes(s), x)
+                (path.clone(), lanes(s), self.words_as(&x, s))
             })
             .collect()
     }
@@ -193,12 +188,7 @@ impl Fx<'_> {
         let mut keep = vec!["i1 false"; n as usize];
         for (path, s, word) in &plan.leaves {
             let x = self.leaf_of(value, path)?;
-            let x = if *s == "i32" {
-                x
-            } else {
-                self.op(&format!("bitcast {} {x} to {}", lanes(s), lanes("i32")))
-            };
-            words[(word - plan.lo) as usize] = x;
+            words[(word - plan.lo) as usize] = self.as_words(&x, s);
             keep[(word - plan.lo) as usize] = "i1 true";
         }
         // Lane k's row, in chunks of W words.
