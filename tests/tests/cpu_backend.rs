@@ -685,6 +685,72 @@ pub fn counters(#[builtin(global_index)] gi: u32, counts: &[AtomicU32], olds: &m
     olds[i] = UVec4::new(a, b, c, d);
 }
 
+/// Counts whose old values no invocation reads (the vector form adds them once per run
+/// of workgroups), beside an atomic load and a read add of counters just added to.
+#[kernel(workgroup = 64)]
+pub fn tallies(#[builtin(global_index)] gi: u32, counts: &[AtomicU32], seen: &mut [UVec2]) {
+    let i = gi as usize;
+    if i >= seen.len() {
+        return;
+    }
+    counts[0].fetch_add(1, Ordering::Relaxed);
+    if i % 3 != 0 {
+        counts[1].fetch_sub(2, Ordering::Relaxed);
+    }
+    // One address per workgroup: a run's pending sum moves from counter to counter.
+    counts[2 + (i / 64) % 3].fetch_add(7, Ordering::Relaxed);
+    counts[5].fetch_add(1, Ordering::Relaxed);
+    let loaded = counts[5].load(Ordering::Relaxed);
+    counts[6].fetch_add(1, Ordering::Relaxed);
+    let read = counts[6].fetch_add(0, Ordering::Relaxed);
+    seen[i] = UVec2::new(loaded, read);
+}
+
+/// Adds whose old values are unread end at the exact sums in both CPU forms, wherever
+/// the vector form defers them, and an invocation's atomic load or read add after its own
+/// add sees that add.
+#[test]
+fn deferred_atomic_adds_end_at_the_sums_and_an_invocation_sees_its_own() {
+    use cohort::runtime::cpu::simd::Forms;
+    for n in [1u32, 63, 1003, 64 * 97 + 5] {
+        for forms in [Forms::Host, Forms::Vector] {
+            let d = Device::cpu_with(forms).unwrap();
+            let spec = tallies::spec(&d, None);
+            let compiled =
+                cohort::compiler::compile(&tallies::build(&spec), "tallies".into()).unwrap();
+            let ir = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled)
+                .unwrap_or_else(|e| panic!("no vector form: {e}"));
+            assert!(
+                ir.contains("cohort_flush"),
+                "no deferred adds in the vector form"
+            );
+            let counts = d.alloc::<u32>(7).unwrap();
+            let seen = d.alloc::<UVec2>(n as usize).unwrap();
+            tallies::launch(&d, n, &counts, &seen).unwrap();
+            let (counts, seen) = (d.read(&counts).unwrap(), d.read(&seen).unwrap());
+            let subs = (0..n).filter(|i| i % 3 != 0).count() as u32;
+            let per_group = |k: u32| 7 * (0..n).filter(|i| (i / 64) % 3 == k).count() as u32;
+            let want = [
+                n,
+                0u32.wrapping_sub(2 * subs),
+                per_group(0),
+                per_group(1),
+                per_group(2),
+                n,
+                n,
+            ];
+            assert_eq!(counts, want, "{forms:?}, {n} invocations");
+            if let Some((i, s)) = seen
+                .iter()
+                .enumerate()
+                .find(|(_, s)| s.x == 0 || s.y == 0 || s.x > n || s.y > n)
+            {
+                panic!("{forms:?}, {n} invocations: invocation {i} saw {s:?}");
+            }
+        }
+    }
+}
+
 /// Each counter ends at the sum of what was added, and the old values that the adds
 /// returned are each step of it exactly once (so a block that adds once hands its lanes
 /// consecutive old values), in both CPU forms, over a dispatch that ends inside a block.

@@ -22,6 +22,7 @@ use cohort_compiler::CompiledKernel;
 use naga::valid::FunctionInfo;
 use naga::{Block, Function, Handle, Module, Statement, TypeInner};
 
+use super::deferred;
 use super::memory::Place;
 use super::types::{iota, lanes, splat_const, value_type, Lowering, W};
 
@@ -80,6 +81,8 @@ pub struct Fx<'a> {
     /// Position in the `env` table of each global's buffer (`None`: not a buffer).
     pub globals: &'a [Option<usize>],
     pub decls: &'a mut BTreeSet<String>,
+    /// Deferred atomic add sites of the whole module so far (`deferred`).
+    pub sites: &'a mut u32,
     pub allocas: String,
     pub body: String,
     next: u32,
@@ -438,6 +441,7 @@ pub fn lower(k: &CompiledKernel, symbol: &str) -> Lowering<String> {
         globals[h.index()] = Some(pos);
     }
     let mut decls = BTreeSet::new();
+    let mut sites = 0u32;
     let mut out = String::new();
     for (h, f) in m.functions.iter() {
         let ret = match &f.result {
@@ -457,6 +461,7 @@ pub fn lower(k: &CompiledKernel, symbol: &str) -> Lowering<String> {
             &k.info[h],
             &globals,
             &mut decls,
+            &mut sites,
             args,
             ret.clone(),
             "",
@@ -486,6 +491,7 @@ pub fn lower(k: &CompiledKernel, symbol: &str) -> Lowering<String> {
         k.info.get_entry_point(0),
         &globals,
         &mut decls,
+        &mut sites,
         args,
         None,
         &pre.concat(),
@@ -496,7 +502,11 @@ pub fn lower(k: &CompiledKernel, symbol: &str) -> Lowering<String> {
         "define internal void @entry(ptr %env, ptr %err, {} %mask, {v} %li, i32 %wx, i32 %wy, i32 %wz, i32 %nx, i32 %ny, i32 %nz) alwaysinline {{\n{body}}}\n",
         Fx::mask_ty()
     );
-    let _ = writeln!(out, "{}", driver(wg, symbol));
+    let _ = writeln!(out, "{}", driver(wg, symbol, sites));
+    let _ = writeln!(out, "{}", deferred::flush_function(sites));
+    if sites > 0 {
+        decls.insert("declare void @llvm.memset.p0.i64(ptr, i8, i64, i1)".into());
+    }
     for d in decls {
         let _ = writeln!(out, "{d}");
     }
@@ -513,6 +523,7 @@ fn function(
     info: &FunctionInfo,
     globals: &[Option<usize>],
     decls: &mut BTreeSet<String>,
+    sites: &mut u32,
     args: Vec<Val>,
     ret: Option<String>,
     prelude: &str,
@@ -524,6 +535,7 @@ fn function(
         info,
         globals,
         decls,
+        sites,
         allocas: String::new(),
         body: String::new(),
         next: 0,
@@ -655,14 +667,16 @@ fn builtin(m: &Module, a: &naga::FunctionArgument, wg: u32) -> Lowering<(String,
     })
 }
 
-/// `cohort_run`: every workgroup of `first..end`, each as blocks of `W` lanes.
-fn driver(wg: u32, symbol: &str) -> String {
+/// `cohort_run`: every workgroup of `first..end`, each as blocks of `W` lanes, in the
+/// context of the module's `sites` deferred atomic adds.
+fn driver(wg: u32, symbol: &str, sites: u32) -> String {
     let v = lanes("i32");
     let m = Fx::mask_ty();
+    let (setup, finish, ctx) = deferred::driver_context(sites);
     format!(
         r#"define void @{symbol}(ptr %env, ptr %err, i32 %first, i32 %end, i32 %nx, i32 %ny, i32 %nz) {{
 entry:
-  br label %wg_head
+{setup}  br label %wg_head
 wg_head:
   %w = phi i32 [ %first, %entry ], [ %w.next, %blocks_done ]
   %more = icmp ult i32 %w, %end
@@ -682,15 +696,14 @@ block_body:
   %b.v = shufflevector {v} %b.0, {v} poison, {v} zeroinitializer
   %li = add {v} %b.v, {iota}
   %mask = icmp ult {v} %li, {wgv}
-  call void @entry(ptr %env, ptr %err, {m} %mask, {v} %li, i32 %wx, i32 %wy, i32 %wz, i32 %nx, i32 %ny, i32 %nz)
+  call void @entry(ptr %env, ptr {ctx}, {m} %mask, {v} %li, i32 %wx, i32 %wy, i32 %wz, i32 %nx, i32 %ny, i32 %nz)
   %b.next = add i32 %b, {W}
   br label %block_head
 blocks_done:
   %w.next = add i32 %w, 1
   br label %wg_head
 exit:
-  ret void
-}}
+{finish}}}
 "#,
         iota = iota(),
         wgv = splat_const("i32", &wg.to_string()),

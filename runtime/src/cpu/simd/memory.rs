@@ -10,6 +10,7 @@
 
 use naga::{Handle, ScalarKind, TypeInner};
 
+use super::deferred::{deferred_offsets, holds_atomic, FLUSH};
 use super::lower::{Fx, Val};
 use super::rows::RowsAt;
 use super::types::{byte_size, iota, lanes, leaves, scalar, splat_const, value_type, Lowering};
@@ -391,6 +392,9 @@ impl Fx<'_> {
 
     pub fn load(&mut self, p: &Place) -> Lowering<Val> {
         let ty = value_type(self.m, &p.ty)?;
+        if holds_atomic(self.m, &p.ty) {
+            self.flush_deferred();
+        }
         if let Some(addr) = self.uniform_local(p) {
             let v = self.op(&format!("load {ty}, ptr {addr}"));
             return Ok(Val::r(ty, v));
@@ -804,6 +808,9 @@ impl Fx<'_> {
     /// consecutive, else a masked scatter per leaf.
     pub fn store(&mut self, p: &Place, value: &Val, mask: &str) -> Lowering<()> {
         let ty = value_type(self.m, &p.ty)?;
+        if holds_atomic(self.m, &p.ty) {
+            self.flush_deferred();
+        }
         if let Some(addr) = self.uniform_local(p) {
             let old = self.op(&format!("load {ty}, ptr {addr}"));
             let new = self.blend_typed(mask, value, &Val::r(ty.clone(), old), &p.ty.clone())?;
@@ -926,8 +933,11 @@ impl Fx<'_> {
     /// address, as a kernel counts what it finished, one atomic adds the value times the
     /// number of lanes, and each lane's old value is what the lane-by-lane loop would give
     /// it (the old value plus the value times the lanes before it). Lanes that contend for
-    /// one cache line then make one locked operation per block instead of one each. Falls
-    /// through to the lane-by-lane loop otherwise; branches to `join` when done.
+    /// one cache line then make one locked operation per block instead of one each. With
+    /// `deferred` (a site whose old values nobody reads), the block's sum is added to the
+    /// site's pending sum instead ([`Fx::defer_add`]). Falls through to the lane-by-lane
+    /// loop otherwise; branches to `join` when done.
+    #[allow(clippy::too_many_arguments)]
     fn atomic_add_once(
         &mut self,
         op: &str,
@@ -936,6 +946,7 @@ impl Fx<'_> {
         val: &str,
         old_slot: &str,
         join: &str,
+        deferred: Option<u32>,
     ) {
         let w = super::types::W;
         let (v, v64, m) = (lanes("i32"), lanes("i64"), Fx::mask_ty());
@@ -969,6 +980,16 @@ impl Fx<'_> {
         let count = self.op(&format!("call i{w} @llvm.ctpop.i{w}(i{w} {bits})"));
         let count = self.op(&format!("zext i{w} {count} to i32"));
         let total = self.op(&format!("mul i32 {x0}, {count}"));
+        if let Some(site) = deferred {
+            let delta = match op {
+                "sub" => self.op(&format!("sub i32 0, {total}")),
+                _ => total,
+            };
+            self.defer_add(site, &p0, &delta);
+            self.line(&format!("br label %{join}"));
+            self.body.push_str(&format!("{lanes_}:\n"));
+            return;
+        }
         let old = self.op(&format!("atomicrmw {op} ptr {p0}, i32 {total} seq_cst"));
         // Each lane's count of running lanes before it.
         let bits32 = self.op(&format!("zext i{w} {bits} to i32"));
@@ -983,6 +1004,40 @@ impl Fx<'_> {
         self.line(&format!("store {v} {olds}, ptr {old_slot}"));
         self.line(&format!("br label %{join}"));
         self.body.push_str(&format!("{lanes_}:\n"));
+    }
+
+    /// Adds `delta` (`i32`) to deferred site `site`'s pending sum for address `p`. A site
+    /// holds one address: a different one first adds the pending sum to the old address.
+    /// The sums live in the run's context (`%err`, `deferred::DEFERRED_AT`) and are added by one
+    /// atomic each when the run ends or before any other atomic access
+    /// ([`Fx::flush_deferred`]).
+    fn defer_add(&mut self, site: u32, p: &str, delta: &str) {
+        let (at_ptr, at_sum) = deferred_offsets(site);
+        let sp = self.op(&format!("getelementptr i8, ptr %err, i64 {at_ptr}"));
+        let sv = self.op(&format!("getelementptr i8, ptr %err, i64 {at_sum}"));
+        let cur = self.op(&format!("load ptr, ptr {sp}"));
+        let pending = self.op(&format!("load i32, ptr {sv}"));
+        let same = self.op(&format!("icmp eq ptr {cur}, {p}"));
+        let empty = self.op(&format!("icmp eq i32 {pending}, 0"));
+        let keep = self.op(&format!("or i1 {same}, {empty}"));
+        let (flush, add) = (self.label(), self.label());
+        let from = self.label();
+        self.line(&format!("br label %{from}"));
+        self.body.push_str(&format!("{from}:\n"));
+        self.line(&format!("br i1 {keep}, label %{add}, label %{flush}"));
+        self.body.push_str(&format!("{flush}:\n"));
+        self.op(&format!("atomicrmw add ptr {cur}, i32 {pending} seq_cst"));
+        self.line(&format!("br label %{add}"));
+        self.body.push_str(&format!("{add}:\n"));
+        let base = self.op(&format!("phi i32 [ {pending}, %{from} ], [ 0, %{flush} ]"));
+        let sum = self.op(&format!("add i32 {base}, {delta}"));
+        self.line(&format!("store ptr {p}, ptr {sp}"));
+        self.line(&format!("store i32 {sum}, ptr {sv}"));
+    }
+
+    /// Adds every deferred site's pending sum, before an atomic access that could see it.
+    pub(super) fn flush_deferred(&mut self) {
+        self.line(&format!("call void @{FLUSH}(ptr %err)"));
     }
 
     /// An atomic read-modify-write, one lane after another (in lane order, as the host
@@ -1034,11 +1089,23 @@ impl Fx<'_> {
             Fx::mask_ty()
         ));
         let join = self.label();
-        if matches!(
+        let adds = matches!(
             fun,
             naga::AtomicFunction::Add | naga::AtomicFunction::Subtract
-        ) {
-            self.atomic_add_once(op, &mask, &ptrs, &val, &old_slot, &join);
+        );
+        // An add whose old value no expression reads: nothing in the dispatch can tell
+        // when it lands, except an atomic access that flushes the pending sums first.
+        let unread = result.is_none_or(|r| self.info[r].ref_count == 0);
+        let deferred = (adds && unread).then(|| {
+            let site = *self.sites;
+            *self.sites += 1;
+            site
+        });
+        if deferred.is_none() {
+            self.flush_deferred();
+        }
+        if adds {
+            self.atomic_add_once(op, &mask, &ptrs, &val, &old_slot, &join, deferred);
         }
         for lane in 0..super::types::W {
             let on = self.op(&format!(

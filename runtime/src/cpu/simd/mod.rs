@@ -7,6 +7,7 @@
 //! `COHORT_CPU_SIMD_PERF_MAP=1` names each one's code for `perf` (`perf_map`).
 
 mod choice;
+mod deferred;
 mod expr;
 mod llvm;
 mod lower;
