@@ -219,6 +219,8 @@ fn main() -> ExitCode {
         Command::Devices => devices::list(),
         Command::View(a) => view::run(a),
     };
+    // Before exit destroys LLVM's static objects, which a background compile may use.
+    cohort::runtime::stop_background_compiles();
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

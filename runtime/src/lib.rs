@@ -53,6 +53,15 @@ pub use disk_cache::cache_dir;
 pub use error::{Result, RuntimeError};
 pub use hash::hash64;
 
+/// What a program calls as it ends (the `cohort` CLI does): waits, at most 5 s, for a
+/// CPU vector form that LLVM is compiling in the background, and starts no other (kernels
+/// then keep their host forms). Exit does the same, but a compile that is the first to
+/// use some static object of LLVM's has that object destroyed under it before exit's
+/// handler runs; called before exit, nothing is destroyed yet. Call it once, at the end.
+pub fn stop_background_compiles() {
+    cpu::simd::stop_compiles();
+}
+
 /// Which GPU API a [`Device`] drives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum BackendKind {

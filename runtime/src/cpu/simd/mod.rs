@@ -22,6 +22,7 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use cohort_compiler::CompiledKernel;
 
 pub use choice::{Chooser, Forms};
+pub use llvm::stop_compiles;
 pub use types::W as LANES;
 
 /// One binding as the vector form reads it: base address and bound size in bytes.
