@@ -96,6 +96,19 @@ pub fn compiling(name: &str) -> Compiling {
     Compiling
 }
 
+/// The kernel whose vector form LLVM is compiling now, if any (the one a crash report
+/// names).
+pub fn compiling_now() -> Option<&'static str> {
+    let p = COMPILING.load(Ordering::Acquire);
+    if p.is_null() {
+        return None;
+    }
+    let len = COMPILING_LEN.load(Ordering::Acquire);
+    // SAFETY: a leaked &'static str's pointer and length, the length stored first;
+    // compiles run one at a time, so the two belong together.
+    Some(unsafe { std::str::from_utf8_unchecked(std::slice::from_raw_parts(p, len)) })
+}
+
 /// See [`compiling`].
 pub struct Compiling;
 

@@ -27,6 +27,7 @@ pub mod crash_report;
 mod device;
 mod disk_cache;
 mod error;
+mod exit_hook;
 mod float_controls;
 mod hash;
 mod pipeline_cache;
@@ -55,11 +56,13 @@ pub use hash::hash64;
 
 /// What a program calls as it ends (the `cohort` CLI does): waits, at most 5 s, for a
 /// CPU vector form that LLVM is compiling in the background, and starts no other (kernels
-/// then keep their host forms). Exit does the same, but a compile that is the first to
-/// use some static object of LLVM's has that object destroyed under it before exit's
-/// handler runs; called before exit, nothing is destroyed yet. Call it once, at the end.
+/// then keep their host forms). A program that returns from `main` does the same as its
+/// main thread exits, before exit destroys LLVM's static objects; one that ends with
+/// `std::process::exit` on another thread waits in an `atexit` handler, after the
+/// destruction of any static object that the compile in flight was first to create.
+/// Called before exit, nothing is destroyed yet. Call it once, at the end.
 pub fn stop_background_compiles() {
-    cpu::simd::stop_compiles();
+    cpu::simd::stop_compiles("as the program ends");
 }
 
 /// Which GPU API a [`Device`] drives.

@@ -84,6 +84,7 @@ const CANDIDATES: &[&str] = &[
 /// that its symbols never displace those of another LLVM in the process, Mesa's), so the
 /// next candidate is tried.
 fn open() -> Result<Jit, String> {
+    crate::exit_hook::keep();
     let wanted: Vec<String> = match std::env::var("COHORT_LIBLLVM") {
         Ok(p) if !p.is_empty() => vec![p],
         _ => CANDIDATES.iter().map(|s| s.to_string()).collect(),
@@ -578,29 +579,40 @@ static EXITING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::n
 /// handler; [`Jit::warm_up`] makes that rare, and [`crate::stop_background_compiles`],
 /// called before exit, rules it out.
 extern "C" fn finish_compiles() {
-    stop_compiles();
+    stop_compiles("at exit");
 }
 
 /// Waits for a compile in flight (at most [`EXIT_WAIT`]) and keeps any other from
-/// starting: what a process calls before it ends, while LLVM's static objects are all
-/// still there ([`crate::stop_background_compiles`]), and what exit calls.
-pub fn stop_compiles() {
+/// starting: what a process does before it ends, while LLVM's static objects are all
+/// still there ([`crate::stop_background_compiles`], `crate::exit_hook`), and what exit's
+/// handler does. `when` says which, in the `COHORT_CPU_SIMD_LOG` line of a wait.
+pub fn stop_compiles(when: &str) {
     if EXITING.swap(true, std::sync::atomic::Ordering::SeqCst) {
         return;
     }
     let Some(Ok(j)) = JIT.get() else { return };
+    let waited_for = crate::crash_report::compiling_now();
     // Bounded: a compile that never ends (LLVM broken under it by a static it created,
     // destroyed before this handler ran) must not keep the process from exiting. A
     // handler that waited without bound hung a render for 37 minutes.
     let start = Instant::now();
     while start.elapsed() < EXIT_WAIT {
-        match j.compiling.try_lock() {
-            Ok(g) => return std::mem::forget(g),
-            Err(std::sync::TryLockError::Poisoned(e)) => return std::mem::forget(e.into_inner()),
+        let guard = match j.compiling.try_lock() {
+            Ok(g) => g,
+            Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
             Err(std::sync::TryLockError::WouldBlock) => {
-                std::thread::sleep(Duration::from_millis(1))
+                std::thread::sleep(Duration::from_millis(1));
+                continue;
             }
+        };
+        std::mem::forget(guard);
+        if let (Some(name), true) = (waited_for, super::log()) {
+            eprintln!(
+                "cohort: waited {:.3} s {when} for the vector form of `{name}` to compile",
+                start.elapsed().as_secs_f64()
+            );
         }
+        return;
     }
 }
 
