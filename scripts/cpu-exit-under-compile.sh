@@ -3,14 +3,10 @@
 # of stanford-like (512x512, 16 paths, light sampling) on the CPU backend, the builds in
 # turn, for $LOOP_S seconds (default 300); a failure is a non-zero exit status, with the
 # render's last lines (a crash report names the thread and the kernel being compiled).
-# Usage: from a folder holding the builds, with the repository's scenes at
+# Usage, with $B the folder holding the builds (default the current one) and the scenes at
 # ../render/tests/scenes: BINS="cohort-old cohort" scripts/cpu-exit-under-compile.sh
 set -u
-cd "${B:-.}"
-BINS="${BINS:-cohort-old cohort}"
-for f in *.xz; do [ -e "$f" ] && xz -d -k -f "$f" && chmod +x "${f%.xz}"; done
-export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
-echo "$(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%FT%TZ)"
+. "$(dirname "$0")/cpu-bins.sh"
 S=../render/tests/scenes/stanford-like/scene.xml
 fails=0; runs=0; i=0
 end=$((SECONDS + ${LOOP_S:-300}))

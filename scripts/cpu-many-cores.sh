@@ -3,14 +3,10 @@
 # alternated: cornell (embedded), normal, warp and block_256, then stanford-like with
 # light sampling; 512x512, 64 paths. Three warm-up rounds first (vector forms compile once
 # a kernel's host form has run as long as LLVM would take). Usage: from a folder holding
-# the builds (xz-compressed ones are unpacked), with the repository's scenes at
+# the builds (xz-compressed ones are unpacked; $B names it), with the repository's scenes at
 # ../render/tests/scenes: BINS="cohort-old cohort" scripts/cpu-many-cores.sh
 set -u
-cd "${B:-.}"
-BINS="${BINS:-cohort-old cohort}"
-for f in *.xz; do [ -e "$f" ] && xz -d -k -f "$f" && chmod +x "${f%.xz}"; done
-export XDG_RUNTIME_DIR=$(mktemp -d); chmod 700 "$XDG_RUNTIME_DIR"
-echo "$(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%FT%TZ)"
+. "$(dirname "$0")/cpu-bins.sh"
 SCENE=""
 run() { ./$1 render --backend cpu $SCENE --algorithm $2 --width 512 --height 512 --paths 64 --out /tmp/r-$1.exr --stats /tmp/r-$1.json >/dev/null 2>&1; python3 -c "
 import json;d=json.load(open('/tmp/r-$1.json'));k=d['kernel_ms'];print('$3 $2 $1', round(d['paths_per_second']/1e6,3), {x:round(v) for x,v in k.items() if v})"; }

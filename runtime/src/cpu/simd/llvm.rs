@@ -366,7 +366,7 @@ impl Jit {
     /// away) and registers [`finish_compiles`] after it. The static objects LLVM creates on
     /// first use register their destructors as they are created, so exit would run those
     /// of a first compile in flight before any handler registered earlier: a segfault at
-    /// exit, seen in 1 of 66 renders on 16 cores (2026-11-30). The warm-up creates most of
+    /// exit, seen in 1 of 174 renders on 16 cores (2026-11-30). The warm-up creates most of
     /// them, so the handler registered after it outlives them, and a compile in flight at
     /// exit is waited for. Runs under the `compiling` lock.
     fn warm_up(&self) {
