@@ -805,3 +805,68 @@ fn atomic_adds_return_every_old_value_once() {
         }
     }
 }
+
+/// An IR-only kernel (no Rust source, so no host form: the CPU backend runs its vector
+/// form) that indexes a buffer with an `i32`, as a naga module from another front end
+/// may: `out[gi] = xs[gi as i32 + offsets[gi]]`.
+fn signed_index_kernel() -> cohort::runtime::KernelArtifact {
+    use cohort::ir::{self, builtin, AsPlace, Buffer};
+    use cohort::{Group, KernelInfo, Spec};
+    static INFO: KernelInfo = KernelInfo {
+        name: "signed_index",
+        file: file!(),
+        line: line!(),
+        column: 1,
+        workgroup_size: 64,
+        group: Group::Thread,
+        finite_loops: false,
+    };
+    let built = ir::build_kernel(&INFO, Spec::portable(&INFO, Group::Thread), || {
+        let gi = builtin::global_index();
+        let offsets = Buffer::<i32>::declare("offsets", false);
+        let xs = Buffer::<u32>::declare("xs", false);
+        let out = Buffer::<u32>::declare("out", true);
+        let i = ir::cast::<i32, u32>(gi) + ir::place_index(offsets.as_place(), gi).get();
+        let x = ir::place_index(xs.as_place(), i).get();
+        ir::place_index(out.as_place(), gi).set(x);
+    });
+    cohort::emit::compile(&built, "signed_index".into()).unwrap()
+}
+
+/// A signed index is sign-extended to the vector form's 64-bit offsets: one below zero is
+/// out of bounds (the bound test `offset + size <= len` would wrap to pass at -1 element,
+/// reading the 4 bytes before the buffer), one within bounds reads its element.
+#[test]
+fn a_signed_index_below_zero_is_out_of_bounds_in_the_vector_form() {
+    use cohort::runtime::cpu::simd::Forms;
+    use cohort::runtime::{BufferArg, Dispatch};
+    let art = signed_index_kernel();
+    let d = Device::cpu_with(Forms::Vector).unwrap();
+    let xs: Vec<u32> = (0..64).map(|i| 100 + i).collect();
+    let xs_b = d.upload(&xs).unwrap();
+    let out = d.alloc::<u32>(64).unwrap();
+    let run = |offsets: &[i32]| {
+        let offsets_b = d.upload(offsets).unwrap();
+        let args: Vec<BufferArg> = vec![offsets_b.arg(), xs_b.arg(), out.arg()];
+        d.dispatch(&art, &args, Dispatch::Groups([1, 1, 1]))
+    };
+    // Lane 5 reads element 0, lane 63 element 1: in bounds, through a gather.
+    let mut offsets = vec![0i32; 64];
+    offsets[5] = -5;
+    offsets[63] = -62;
+    run(&offsets).unwrap();
+    let mut want = xs.clone();
+    want[5] = 100;
+    want[63] = 101;
+    assert_eq!(d.read(&out).unwrap(), want);
+    // Element -1 (whose end, byte offset 0, is within the buffer), then far below zero.
+    for below in [-10, i32::MIN + 9] {
+        offsets[9] = below;
+        let err = run(&offsets).expect_err("an index below zero must fail");
+        let msg = err.to_string();
+        assert!(
+            msg.contains("signed_index") && msg.contains("index out of bounds"),
+            "{below}: {msg}"
+        );
+    }
+}
