@@ -812,15 +812,7 @@ fn atomic_adds_return_every_old_value_once() {
 fn signed_index_kernel() -> cohort::runtime::KernelArtifact {
     use cohort::ir::{self, builtin, AsPlace, Buffer};
     use cohort::{Group, KernelInfo, Spec};
-    static INFO: KernelInfo = KernelInfo {
-        name: "signed_index",
-        file: file!(),
-        line: line!(),
-        column: 1,
-        workgroup_size: 64,
-        group: Group::Thread,
-        finite_loops: false,
-    };
+    static INFO: KernelInfo = common::ir_kernel_info("signed_index", file!(), line!());
     let built = ir::build_kernel(&INFO, Spec::portable(&INFO, Group::Thread), || {
         let gi = builtin::global_index();
         let offsets = Buffer::<i32>::declare("offsets", false);

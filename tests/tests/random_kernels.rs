@@ -199,15 +199,7 @@ fn ir_f(e: &F, i: In) -> Val<f32> {
     }
 }
 
-static INFO: KernelInfo = KernelInfo {
-    name: "random_expr",
-    file: file!(),
-    line: line!(),
-    column: 1,
-    workgroup_size: 64,
-    group: Group::Thread,
-    finite_loops: false,
-};
+static INFO: KernelInfo = common::ir_kernel_info("random_expr", file!(), line!());
 
 #[test]
 fn random_arithmetic_kernels_agree_everywhere() {

@@ -106,3 +106,21 @@ pub fn assert_close(what: &str, a: &[f32], b: &[f32], max_ulps: u32, abs: f32) {
 pub fn flatten_vec4(v: &[glam::Vec4]) -> Vec<f32> {
     v.iter().flat_map(|x| x.to_array()).collect()
 }
+
+/// What the IR builder needs of a thread-level kernel of 64-invocation workgroups built
+/// without Rust source (`cohort::ir::build_kernel`), named `name` at `file`:`line`.
+pub const fn ir_kernel_info(
+    name: &'static str,
+    file: &'static str,
+    line: u32,
+) -> cohort::KernelInfo {
+    cohort::KernelInfo {
+        name,
+        file,
+        line,
+        column: 1,
+        workgroup_size: 64,
+        group: cohort::Group::Thread,
+        finite_loops: false,
+    }
+}
