@@ -529,8 +529,18 @@ impl Fx<'_> {
         let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
         self.declare(&format!("declare i{w} @llvm.cttz.i{w}(i{w}, i1)"));
         let first = self.op(&format!("call i{w} @llvm.cttz.i{w}(i{w} {bits}, i1 false)"));
-        let first = self.op(&format!("zext i{w} {first} to i32"));
+        let first = self.mask_word_i32(w, &first);
         self.op(&format!("and i32 {first}, {}", w - 1))
+    }
+
+    /// An `i{w}` of mask bits (or a count of them) as an `i32`: `zext` below 32 lanes; at 32
+    /// the value already is one (LLVM has no `zext` from a type to itself).
+    fn mask_word_i32(&mut self, w: u32, x: &str) -> String {
+        if w < 32 {
+            self.op(&format!("zext i{w} {x} to i32"))
+        } else {
+            x.to_string()
+        }
     }
 
     /// Whether every lane of `mask` sits at `base0 + stride * lane`, with `base0` the offset
@@ -978,7 +988,7 @@ impl Fx<'_> {
         let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
         self.declare(&format!("declare i{w} @llvm.ctpop.i{w}(i{w})"));
         let count = self.op(&format!("call i{w} @llvm.ctpop.i{w}(i{w} {bits})"));
-        let count = self.op(&format!("zext i{w} {count} to i32"));
+        let count = self.mask_word_i32(w, &count);
         let total = self.op(&format!("mul i32 {x0}, {count}"));
         if let Some(site) = deferred {
             let delta = match op {
@@ -992,7 +1002,7 @@ impl Fx<'_> {
         }
         let old = self.op(&format!("atomicrmw {op} ptr {p0}, i32 {total} seq_cst"));
         // Each lane's count of running lanes before it.
-        let bits32 = self.op(&format!("zext i{w} {bits} to i32"));
+        let bits32 = self.mask_word_i32(w, &bits);
         let bits32 = self.splat("i32", &bits32);
         let below: Vec<String> = (0..w).map(|l| format!("i32 {}", (1u32 << l) - 1)).collect();
         let before = self.op(&format!("and {v} {bits32}, <{}>", below.join(", ")));
