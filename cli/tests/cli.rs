@@ -792,3 +792,40 @@ fn the_wavefront_is_chosen_and_reported() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2), "--wavefront 0 is a usage error");
 }
+
+/// `COHORT_CPU_SIMD_LANES` sets the block width of the CPU backend's vector forms, and
+/// `cohort devices` says it; a width the vector forms do not take is named in a warning,
+/// and the CPU's register width (8 or 16) stays.
+#[test]
+fn cohort_cpu_simd_lanes_sets_the_vector_width() {
+    let llvm = cohort::runtime::cpu::simd::llvm_library().is_ok();
+    for (value, lanes) in [("32", &["32"][..]), ("12", &["8", "16"][..])] {
+        let out = cohort()
+            .arg("devices")
+            .env("COHORT_CPU_SIMD_LANES", value)
+            .output()
+            .unwrap();
+        assert_ok(&out);
+        let (text, err) = (
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr),
+        );
+        let cpu = text
+            .lines()
+            .find(|l| l.starts_with("cpu"))
+            .unwrap_or_default();
+        if llvm {
+            assert!(
+                lanes
+                    .iter()
+                    .any(|n| cpu.contains(&format!("{n}-lane vector forms"))),
+                "{value}: {text}"
+            );
+        }
+        assert_eq!(
+            err.contains("COHORT_CPU_SIMD_LANES=\"12\" is not one of [8, 16, 32]"),
+            value == "12",
+            "{value}: {err}"
+        );
+    }
+}

@@ -76,6 +76,8 @@ pub(crate) struct CpuDevice {
     pub(crate) info: DeviceInfo,
     pub(crate) limits: Limits,
     forms: cpu::simd::Forms,
+    /// Invocations per block of the vector forms (one of `cpu::simd::WIDTHS`).
+    lanes: u32,
     chooser: cpu::simd::Chooser,
 }
 
@@ -84,9 +86,15 @@ thread_local! {
 }
 
 impl CpuDevice {
-    /// The CPU device, running kernels in `forms`.
-    pub(crate) fn new(which: Option<usize>, forms: cpu::simd::Forms) -> Result<CpuDevice> {
+    /// The CPU device, running kernels in `forms`, vector forms in blocks of `lanes`
+    /// (`cpu::simd::default_lanes` when `None`).
+    pub(crate) fn new(
+        which: Option<usize>,
+        forms: cpu::simd::Forms,
+        lanes: Option<u32>,
+    ) -> Result<CpuDevice> {
         use cpu::simd::Forms;
+        let lanes = lanes.unwrap_or_else(cpu::simd::default_lanes);
         if let Some(index) = which.filter(|&i| i > 0) {
             return Err(RuntimeError::NoSuchDevice {
                 backend: BackendKind::Cpu,
@@ -106,12 +114,9 @@ impl CpuDevice {
                         // The reason, so that a user who named a libLLVM learns why
                         // it was refused.
                         (_, Err(why)) => format!("host forms ({why})"),
-                        (Forms::Vector, Ok(lib)) =>
-                            format!("{}-lane vector forms ({lib})", cpu::simd::LANES),
-                        (Forms::Measured, Ok(lib)) => format!(
-                            "the faster of host and {}-lane vector forms ({lib})",
-                            cpu::simd::LANES
-                        ),
+                        (Forms::Vector, Ok(lib)) => format!("{lanes}-lane vector forms ({lib})"),
+                        (Forms::Measured, Ok(lib)) =>
+                            format!("the faster of host and {lanes}-lane vector forms ({lib})"),
                     }
                 ),
                 software_driver: false,
@@ -139,6 +144,7 @@ impl CpuDevice {
                 max_workgroup_memory: 48 * 1024,
             },
             forms,
+            lanes,
             chooser: Default::default(),
         })
     }
@@ -154,7 +160,7 @@ impl CpuDevice {
         match code {
             Some(k) if self.forms != cpu::simd::Forms::Host => {
                 let wait = self.forms == cpu::simd::Forms::Vector || !has_host;
-                cpu::simd::compiled(k, wait)
+                cpu::simd::compiled(k, self.lanes, wait)
             }
             _ => cpu::simd::Ready::Never,
         }
@@ -264,7 +270,7 @@ impl CpuDevice {
                 (cpu::simd::Ready::Vector(_), _) if cmd.host.is_some() => {
                     self.chooser.record(&cmd.name, vector, ns, invocations)
                 }
-                (cpu::simd::Ready::NotYet, Some(k)) => cpu::simd::ran_host(k, ns),
+                (cpu::simd::Ready::NotYet, Some(k)) => cpu::simd::ran_host(k, self.lanes, ns),
                 _ => {}
             }
         }
@@ -303,7 +309,7 @@ fn run_host(cmd: &Cmd, host: HostKernel, groups: [u32; 3], total: u64) -> Result
 }
 
 /// A dispatch of a kernel's vector form: workgroups spread over the cores as for host
-/// forms, each run as blocks of `LANES` invocations.
+/// forms, each run as blocks of as many invocations as its lowering chose.
 fn run_simd(cmd: &Cmd, k: cpu::simd::SimdKernel, groups: [u32; 3], total: u32) -> Result<()> {
     let env: Vec<cpu::simd::EnvEntry> = cmd
         .args

@@ -170,6 +170,7 @@ impl Device {
             BackendKind::Cpu => Arc::new(cpu_backend::CpuDevice::new(
                 which,
                 crate::cpu::simd::Forms::from_env(),
+                None,
             )?),
         };
         Ok(Device { backend })
@@ -179,7 +180,25 @@ impl Device {
     /// (`Forms::Host` is the reference the vector forms are compared with).
     pub fn cpu_with(forms: crate::cpu::simd::Forms) -> Result<Device> {
         Ok(Device {
-            backend: Arc::new(cpu_backend::CpuDevice::new(None, forms)?),
+            backend: Arc::new(cpu_backend::CpuDevice::new(None, forms, None)?),
+        })
+    }
+
+    /// [`cpu_with`](Self::cpu_with), with vector forms that run `lanes` invocations per
+    /// block (8, 16 or 32: [`crate::cpu::simd::WIDTHS`]) instead of one vector register's
+    /// worth ([`crate::cpu::simd::default_lanes`]). Every width computes the same bits.
+    pub fn cpu_with_lanes(forms: crate::cpu::simd::Forms, lanes: u32) -> Result<Device> {
+        if !crate::cpu::simd::WIDTHS.contains(&lanes) {
+            return Err(RuntimeError::DeviceCreation {
+                backend: BackendKind::Cpu,
+                detail: format!(
+                    "{lanes} lanes per block: the vector forms take {:?}",
+                    crate::cpu::simd::WIDTHS
+                ),
+            });
+        }
+        Ok(Device {
+            backend: Arc::new(cpu_backend::CpuDevice::new(None, forms, Some(lanes))?),
         })
     }
 

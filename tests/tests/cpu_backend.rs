@@ -186,6 +186,33 @@ fn the_cpu_backend_describes_itself() {
     );
 }
 
+/// A CPU device opened with a block width says it in its driver line, and a width the
+/// vector forms do not take is refused with the widths they do.
+#[test]
+fn a_cpu_device_runs_the_vector_width_it_was_opened_with() {
+    use cohort::runtime::cpu::simd::{Forms, WIDTHS};
+    if cohort::runtime::cpu::simd::llvm_library().is_ok() {
+        for lanes in WIDTHS {
+            let d = Device::cpu_with_lanes(Forms::Vector, lanes).unwrap();
+            assert!(
+                d.info()
+                    .driver
+                    .contains(&format!("{lanes}-lane vector forms")),
+                "{}",
+                d.info().driver
+            );
+        }
+    }
+    let e = Device::cpu_with_lanes(Forms::Vector, 12)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("12 lanes per block") && e.contains("[8, 16, 32]"),
+        "{e}"
+    );
+}
+
 /// Which kernels the CPU backend runs as coroutines: those whose invocations wait for each
 /// other (barriers, subgroup operations, `group_any` above thread level). `group_share`
 /// alone makes none wait at any level, because each invocation computes its group's

@@ -8,8 +8,9 @@ use cohort::runtime::{BackendKind, Device};
 /// native CPU backend. With `CI=true` a missing adapter fails the test instead of
 /// skipping it.
 ///
-/// The CPU backend comes twice: with every kernel's host form, and with its vector form
-/// wherever it has one (`cpu::simd`), so that each suite checks both against the host run.
+/// The CPU backend comes with every kernel's host form, and with its vector form wherever it
+/// has one (`cpu::simd`) at each block width the lowering takes, so that each suite checks
+/// every form against the host run.
 pub fn devices() -> Vec<Device> {
     use cohort::runtime::cpu::simd::Forms;
     let mut out: Vec<Device> = [BackendKind::Wgpu, BackendKind::Vulkan]
@@ -22,7 +23,11 @@ pub fn devices() -> Vec<Device> {
         }
     }
     out.push(Device::cpu_with(Forms::Host).expect("the CPU backend always opens"));
-    out.push(Device::cpu_with(Forms::Vector).expect("the CPU backend always opens"));
+    for lanes in cohort::runtime::cpu::simd::WIDTHS {
+        out.push(
+            Device::cpu_with_lanes(Forms::Vector, lanes).expect("the CPU backend always opens"),
+        );
+    }
     out
 }
 

@@ -8,7 +8,7 @@ use naga::{BinaryOperator as Bo, Expression as E, Handle, MathFunction as Mf, Sc
 use naga::{ScalarKind, TypeInner, UnaryOperator as Uo};
 
 use super::lower::{Fx, Val};
-use super::types::{float_text, lanes, scalar, splat_const, value_type, Lowering, W};
+use super::types::{float_text, lanes, scalar, splat_const, value_type, w, Lowering};
 
 /// A value's shape: its vector size (`None` for a scalar) and scalar.
 fn shape(t: &TypeInner) -> Lowering<(Option<u32>, Scalar)> {
@@ -85,7 +85,7 @@ impl Fx<'_> {
     fn fintr(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let args: Vec<(String, String)> = xs.iter().map(|x| (v.clone(), x.clone())).collect();
-        self.call(&v, &format!("llvm.{name}.v{W}f32"), &args)
+        self.call(&v, &format!("llvm.{name}.v{}f32", w()), &args)
     }
 
     /// A function of floats that LLVM has no vector instruction for (`sin`, `acosf`, ...),
@@ -162,7 +162,7 @@ impl Fx<'_> {
     fn libm(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let mut acc = "poison".to_string();
-        for lane in 0..W {
+        for lane in 0..w() {
             let args: Vec<(String, String)> = xs
                 .iter()
                 .map(|x| {
@@ -591,12 +591,12 @@ impl Fx<'_> {
                 }
                 (Float, Sint, true) => fx.call(
                     &tv,
-                    &format!("llvm.fptosi.sat.v{W}i32.v{W}f32"),
+                    &format!("llvm.fptosi.sat.v{w}i32.v{w}f32", w = w()),
                     &[(fv.clone(), a.clone())],
                 ),
                 (Float, Uint, true) => fx.call(
                     &tv,
-                    &format!("llvm.fptoui.sat.v{W}i32.v{W}f32"),
+                    &format!("llvm.fptoui.sat.v{w}i32.v{w}f32", w = w()),
                     &[(fv.clone(), a.clone())],
                 ),
                 (Sint, Float, true) => fx.op(&format!("sitofp {fv} {a} to {tv}")),
@@ -732,7 +732,7 @@ impl Fx<'_> {
                 self.map(&args, n, st, |fx, c| {
                     Ok(fx.call(
                         &v,
-                        &format!("llvm.{name}.v{W}i32"),
+                        &format!("llvm.{name}.v{}i32", w()),
                         &[(v.clone(), c[0].clone()), ("i1".into(), "false".into())],
                     ))
                 })
@@ -746,7 +746,7 @@ impl Fx<'_> {
                 self.map(&args, n, st, |fx, c| {
                     Ok(fx.call(
                         &v,
-                        &format!("llvm.{name}.v{W}i32"),
+                        &format!("llvm.{name}.v{}i32", w()),
                         &[(v.clone(), c[0].clone())],
                     ))
                 })

@@ -49,6 +49,8 @@ pub struct Jit {
     api: Api,
     /// What the objects depend on besides the IR: the library and the host CPU.
     target_key: u64,
+    /// `f32` lanes in one vector register of the target CPU (`lanes`).
+    register_lanes: u32,
     linker: Mutex<Linker>,
     /// Held while LLVM optimises and emits (the target machine is not thread-safe).
     compiling: Mutex<()>,
@@ -295,6 +297,7 @@ impl Jit {
             Ok(Jit {
                 api,
                 target_key,
+                register_lanes: register_lanes(&CStr::from_ptr(features).to_string_lossy()),
                 linker: Mutex::new(Linker {
                     jit,
                     linked: Default::default(),
@@ -307,6 +310,11 @@ impl Jit {
     /// The cache key of the object compiled from `ir`: the IR, the library and the CPU.
     pub fn key(&self, ir: &str) -> u64 {
         crate::hash64(self.target_key, ir.as_bytes())
+    }
+
+    /// `f32` lanes in one vector register of the CPU the vector forms are compiled for.
+    pub fn register_lanes(&self) -> u32 {
+        self.register_lanes
     }
 
     /// Which library this JIT runs on.
@@ -504,6 +512,15 @@ pub fn save_host_time(key: u64, ns: u64) {
 
 /// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
 /// usable libLLVM).
+/// 16 where the target has AVX-512 (LLVM's feature list names `+avx512f`), else 8 (AVX2).
+fn register_lanes(features: &str) -> u32 {
+    if features.split(',').any(|f| f == "+avx512f") {
+        16
+    } else {
+        8
+    }
+}
+
 pub fn jit() -> &'static Result<Jit, String> {
     JIT.get_or_init(open)
 }

@@ -24,7 +24,7 @@ use naga::{Block, Function, Handle, Module, Statement, TypeInner};
 
 use super::deferred;
 use super::memory::Place;
-use super::types::{iota, lanes, splat_const, value_type, Lowering, W};
+use super::types::{iota, lanes, splat_const, value_type, w, Lowering, Width};
 
 /// Default name of the generated function the backend calls:
 /// `run(env, err, first, end, nx, ny, nz)` runs workgroups `first..end` of an
@@ -145,11 +145,13 @@ impl<'a> Fx<'a> {
     }
     pub fn any(&mut self, m: &str) -> String {
         self.declare(&format!(
-            "declare i1 @llvm.vector.reduce.or.v{W}i1({})",
+            "declare i1 @llvm.vector.reduce.or.v{}i1({})",
+            w(),
             Self::mask_ty()
         ));
         self.op(&format!(
-            "call i1 @llvm.vector.reduce.or.v{W}i1({} {m})",
+            "call i1 @llvm.vector.reduce.or.v{}i1({} {m})",
+            w(),
             Self::mask_ty()
         ))
     }
@@ -415,8 +417,10 @@ impl<'a> Fx<'a> {
     }
 }
 
-/// Lowers every function of the kernel, and the workgroup loop that calls its entry point.
-pub fn lower(k: &CompiledKernel, symbol: &str) -> Lowering<String> {
+/// Lowers every function of the kernel, and the workgroup loop that calls its entry point,
+/// for blocks of `width` invocations (one of `types::WIDTHS`).
+pub fn lower(k: &CompiledKernel, symbol: &str, width: u32) -> Lowering<String> {
+    let _width = Width::set(width);
     if !k.prints.is_empty() {
         return Err("printing".into());
     }
@@ -697,7 +701,7 @@ block_body:
   %li = add {v} %b.v, {iota}
   %mask = icmp ult {v} %li, {wgv}
   call void @entry(ptr %env, ptr {ctx}, {m} %mask, {v} %li, i32 %wx, i32 %wy, i32 %wz, i32 %nx, i32 %ny, i32 %nz)
-  %b.next = add i32 %b, {W}
+  %b.next = add i32 %b, {w}
   br label %block_head
 blocks_done:
   %w.next = add i32 %w, 1
@@ -706,6 +710,7 @@ exit:
 {finish}}}
 "#,
         iota = iota(),
+        w = w(),
         wgv = splat_const("i32", &wg.to_string()),
     )
 }

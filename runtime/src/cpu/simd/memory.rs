@@ -525,7 +525,7 @@ impl Fx<'_> {
     /// The index (`i32`) of the first lane on in `mask` (lane 0 when none is).
     pub fn first_active(&mut self, mask: &str) -> String {
         let m = Fx::mask_ty();
-        let w = super::types::W;
+        let w = super::types::w();
         let bits = self.op(&format!("bitcast {m} {mask} to i{w}"));
         self.declare(&format!("declare i{w} @llvm.cttz.i{w}(i{w}, i1)"));
         let first = self.op(&format!("call i{w} @llvm.cttz.i{w}(i{w} {bits}, i1 false)"));
@@ -557,7 +557,7 @@ impl Fx<'_> {
         let f64_ = self.op(&format!("zext i32 {first} to i64"));
         let back = self.op(&format!("mul i64 {f64_}, {stride}"));
         let base0 = self.op(&format!("sub i64 {d0}, {back}"));
-        let steps: Vec<String> = (0..u64::from(super::types::W))
+        let steps: Vec<String> = (0..u64::from(super::types::w()))
             .map(|k| format!("i64 {}", k * stride))
             .collect();
         let b = self.splat("i64", &base0);
@@ -581,7 +581,7 @@ impl Fx<'_> {
     ) -> Vec<(Vec<u32>, String, String)> {
         let mut parts = Vec::with_capacity(leaves.len());
         for (path, s, word) in leaves {
-            let pick: Vec<String> = (0..u64::from(super::types::W))
+            let pick: Vec<String> = (0..u64::from(super::types::w()))
                 .map(|k| format!("i32 {}", k * m + word - lo))
                 .collect();
             let x = self.op(&format!(
@@ -606,7 +606,7 @@ impl Fx<'_> {
         }
         let m = stride / 4;
         let ls = leaves(self.m, &p.ty).ok()?;
-        if m > 4 * ls.len() as u64 || m * u64::from(super::types::W) > 256 {
+        if m > 4 * ls.len() as u64 || m * u64::from(super::types::w()) > 256 {
             return None;
         }
         let mut leaves_out = Vec::with_capacity(ls.len());
@@ -625,7 +625,7 @@ impl Fx<'_> {
 
     /// `<W*m x i1>`: lane `k`'s mask bit on the words of its block that `plan` reads.
     fn wide_mask(&mut self, plan: &Wide, mask: &str) -> (String, String) {
-        let w = u64::from(super::types::W);
+        let w = u64::from(super::types::w());
         let n = w * plan.m;
         let spread: Vec<String> = (0..n).map(|j| format!("i32 {}", j / plan.m)).collect();
         let e = self.op(&format!(
@@ -654,7 +654,7 @@ impl Fx<'_> {
 
     /// Loads consecutive lanes' blocks with one masked load and picks each leaf's lanes.
     fn wide_load(&mut self, at: &WideAt, plan: &Wide, mask: &str, ty: &str) -> String {
-        let w = u64::from(super::types::W);
+        let w = u64::from(super::types::w());
         let n = w * plan.m;
         let ptr = self.wide_pointer(at);
         let (e, mty) = self.wide_mask(plan, mask);
@@ -671,7 +671,7 @@ impl Fx<'_> {
 
     /// Stores consecutive lanes' leaves of `value` with one masked store.
     fn wide_store(&mut self, at: &WideAt, plan: &Wide, mask: &str, value: &Val) -> Lowering<()> {
-        let w = u64::from(super::types::W);
+        let w = u64::from(super::types::w());
         let n = w * plan.m;
         let (joined, len) = self.leaves_as_words(value, &plan.leaves)?;
         let place: Vec<String> = (0..n)
@@ -731,7 +731,7 @@ impl Fx<'_> {
         if level.is_empty() {
             return Err("a store of no leaves".into());
         }
-        Ok(self.concat(level, u64::from(super::types::W)))
+        Ok(self.concat(level, u64::from(super::types::w())))
     }
 
     /// Vectors of `len` words each (at least one), concatenated pairwise into one vector
@@ -800,13 +800,13 @@ impl Fx<'_> {
                 "declare {v} @llvm.masked.gather.v{w}{sfx}.v{w}p0({}, i32, {}, {v})",
                 lanes("ptr"),
                 Fx::mask_ty(),
-                w = super::types::W
+                w = super::types::w()
             ));
             let x = self.op(&format!(
                 "call {v} @llvm.masked.gather.v{w}{sfx}.v{w}p0({} {ptrs}, i32 4, {} {mask}, {v} zeroinitializer)",
                 lanes("ptr"),
                 Fx::mask_ty(),
-                w = super::types::W
+                w = super::types::w()
             ));
             parts.push((path, v, x));
         }
@@ -881,13 +881,13 @@ impl Fx<'_> {
                 "declare void @llvm.masked.scatter.v{w}{sfx}.v{w}p0({v}, {}, i32, {})",
                 lanes("ptr"),
                 Fx::mask_ty(),
-                w = super::types::W
+                w = super::types::w()
             ));
             self.line(&format!(
                 "call void @llvm.masked.scatter.v{w}{sfx}.v{w}p0({v} {x}, {} {ptrs}, i32 4, {} {mask})",
                 lanes("ptr"),
                 Fx::mask_ty(),
-                w = super::types::W
+                w = super::types::w()
             ));
         }
         Ok(())
@@ -958,7 +958,7 @@ impl Fx<'_> {
         join: &str,
         deferred: Option<u32>,
     ) {
-        let w = super::types::W;
+        let w = super::types::w();
         let (v, v64, m) = (lanes("i32"), lanes("i64"), Fx::mask_ty());
         let first = self.first_active(mask);
         let p0 = self.op(&format!(
@@ -1117,7 +1117,7 @@ impl Fx<'_> {
         if adds {
             self.atomic_add_once(op, &mask, &ptrs, &val, &old_slot, &join, deferred);
         }
-        for lane in 0..super::types::W {
+        for lane in 0..super::types::w() {
             let on = self.op(&format!(
                 "extractelement {} {mask}, i32 {lane}",
                 Fx::mask_ty()

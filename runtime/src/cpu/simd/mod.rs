@@ -15,6 +15,7 @@ mod memory;
 mod perf_map;
 mod rows;
 mod types;
+mod width;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
@@ -23,7 +24,8 @@ use cohort_compiler::CompiledKernel;
 
 pub use choice::{Chooser, Forms};
 pub use llvm::stop_compiles;
-pub use types::W as LANES;
+pub use types::WIDTHS;
+pub use width::default_lanes;
 
 /// One binding as the vector form reads it: base address and bound size in bytes.
 #[repr(C)]
@@ -84,9 +86,10 @@ pub fn llvm_library() -> Result<String, String> {
     }
 }
 
-/// The LLVM IR of a kernel's vector form, or what in it the vector form does not cover.
+/// The LLVM IR of a kernel's vector form in blocks of [`default_lanes`], or what in it the
+/// vector form does not cover.
 pub fn lower_to_llvm_ir(k: &CompiledKernel) -> Result<String, String> {
-    lower::lower(k, lower::RUN)
+    lower::lower(k, lower::RUN, default_lanes())
 }
 
 /// What LLVM is assumed to take per byte of IR before this process has compiled anything
@@ -109,7 +112,8 @@ enum State {
 }
 
 struct Cache {
-    kernels: Mutex<HashMap<u64, State>>,
+    /// By kernel id and block width.
+    kernels: Mutex<HashMap<(u64, u32), State>>,
     done: Condvar,
     /// Running estimate of LLVM's nanoseconds per byte of IR, from this process's compiles.
     ns_per_byte: Mutex<f64>,
@@ -141,21 +145,23 @@ pub enum Ready {
 /// has run as long as the compile is estimated to take (from the IR's size), counted over
 /// runs on this machine (the time is kept beside the object cache): a kernel that runs
 /// little never pays LLVM more than its host form took, and one that runs often compiles
-/// once per machine. With `wait` it is compiled at once and waited for.
-pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Ready {
+/// once per machine. With `wait` it is compiled at once and waited for. `lanes` is the
+/// width of its blocks (one of [`WIDTHS`]).
+pub fn compiled(k: &Arc<CompiledKernel>, lanes: u32, wait: bool) -> Ready {
     let c = cache();
+    let id = (k.id, lanes);
     let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
-    if !kernels.contains_key(&k.id) {
+    if !kernels.contains_key(&id) {
         drop(kernels);
-        let first = probe(k);
+        let first = probe(k, lanes);
         kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
-        kernels.entry(k.id).or_insert(first);
+        kernels.entry(id).or_insert(first);
     }
     if wait {
-        start_if_cold(&mut kernels, k);
+        start_if_cold(&mut kernels, k, lanes);
     }
     loop {
-        match kernels.get(&k.id) {
+        match kernels.get(&id) {
             Some(State::Done(Ok(v))) => return Ready::Vector(*v),
             Some(State::Done(Err(_))) => return Ready::Never,
             _ if !wait => return Ready::NotYet,
@@ -167,7 +173,7 @@ pub fn compiled(k: &Arc<CompiledKernel>, wait: bool) -> Ready {
 /// Records `ns` more of `k`'s host form (after [`Ready::NotYet`]); starts compiling its
 /// vector form once that time, over runs, reaches the compile's estimate, and keeps it on
 /// disk at every eighth of the estimate.
-pub fn ran_host(k: &Arc<CompiledKernel>, ns: u64) {
+pub fn ran_host(k: &Arc<CompiledKernel>, lanes: u32, ns: u64) {
     let c = cache();
     let per_byte = *c.ns_per_byte.lock().unwrap_or_else(|e| e.into_inner());
     let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
@@ -176,7 +182,7 @@ pub fn ran_host(k: &Arc<CompiledKernel>, ns: u64) {
         key,
         host_ns,
         saved_ns,
-    }) = kernels.get_mut(&k.id)
+    }) = kernels.get_mut(&(k.id, lanes))
     {
         *host_ns += ns;
         let estimate = per_byte * ir.len() as f64;
@@ -189,7 +195,7 @@ pub fn ran_host(k: &Arc<CompiledKernel>, ns: u64) {
                     estimate * 1e-9
                 );
             }
-            start_if_cold(&mut kernels, k);
+            start_if_cold(&mut kernels, k, lanes);
         } else if (*host_ns - *saved_ns) as f64 >= estimate / 8.0 {
             *saved_ns = *host_ns;
             llvm::save_host_time(*key, *host_ns);
@@ -197,17 +203,17 @@ pub fn ran_host(k: &Arc<CompiledKernel>, ns: u64) {
     }
 }
 
-fn start_if_cold(kernels: &mut HashMap<u64, State>, k: &Arc<CompiledKernel>) {
-    if let Some(State::Cold { ir, .. }) = kernels.get(&k.id) {
+fn start_if_cold(kernels: &mut HashMap<(u64, u32), State>, k: &Arc<CompiledKernel>, lanes: u32) {
+    if let Some(State::Cold { ir, .. }) = kernels.get(&(k.id, lanes)) {
         let ir = Arc::clone(ir);
-        kernels.insert(k.id, State::Pending);
-        spawn_build(Arc::clone(k), ir);
+        kernels.insert((k.id, lanes), State::Pending);
+        spawn_build(Arc::clone(k), lanes, ir);
     }
 }
 
 /// The vector form of `k` without compiling: linked from the object cache, refused (no
 /// libLLVM, or a construct the lowering does not cover), or `Cold` with its IR.
-fn probe(k: &CompiledKernel) -> State {
+fn probe(k: &CompiledKernel, lanes: u32) -> State {
     let jit = match llvm::jit() {
         Ok(j) => j,
         Err(e) => {
@@ -217,7 +223,7 @@ fn probe(k: &CompiledKernel) -> State {
             return State::Done(Err(e.clone()));
         }
     };
-    let ir: Arc<str> = match lower::lower(k, lower::RUN) {
+    let ir: Arc<str> = match lower::lower(k, lower::RUN, lanes) {
         Ok(ir) => ir.into(),
         Err(e) => {
             if log() {
@@ -254,7 +260,7 @@ fn probe(k: &CompiledKernel) -> State {
     State::Done(r)
 }
 
-fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
+fn spawn_build(k: Arc<CompiledKernel>, lanes: u32, ir: Arc<str>) {
     // Named, so that a crash report or a profile says which thread LLVM ran on.
     let build_thread = std::thread::Builder::new().name("cohort-llvm".into());
     let spawned = build_thread.spawn(move || {
@@ -270,8 +276,9 @@ fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
         if log() {
             match &r {
                 Ok(v) => eprintln!(
-                    "cohort: `{}` has a vector form (compiled in {:.3} s, {} bytes of IR, {:.0} ns per byte; entry at {:p})",
+                    "cohort: `{}` has a vector form of {} lanes (compiled in {:.3} s, {} bytes of IR, {:.0} ns per byte; entry at {:p})",
                     k.name,
+                    lanes,
                     took.as_secs_f64(),
                     ir.len(),
                     took.as_nanos() as f64 / ir.len().max(1) as f64,
@@ -281,7 +288,7 @@ fn spawn_build(k: Arc<CompiledKernel>, ir: Arc<str>) {
             }
         }
         let mut kernels = c.kernels.lock().unwrap_or_else(|e| e.into_inner());
-        kernels.insert(k.id, State::Done(r));
+        kernels.insert((k.id, lanes), State::Done(r));
         c.done.notify_all();
     });
     // As `std::thread::spawn` does: a process that cannot start a thread cannot go on.

@@ -10,7 +10,7 @@
 
 use super::lower::{Fx, Val};
 use super::memory::Place;
-use super::types::{lanes, leaves, scalar, splat_const, Lowering, W};
+use super::types::{lanes, leaves, scalar, splat_const, w, Lowering};
 
 /// Which words of the lanes' scattered elements of a place move as rows ([`Fx::row_plan`]):
 /// words `lo..lo + n` of each element, and each leaf's (path, scalar, word).
@@ -51,7 +51,7 @@ impl Fx<'_> {
         }
         let lo = out.iter().map(|l| l.2).min()?;
         let n = out.iter().map(|l| l.2).max()? + 1 - lo;
-        if n > 2 * out.len() as u64 || n * u64::from(W) > 512 {
+        if n > 2 * out.len() as u64 || n * u64::from(w()) > 512 {
             return None;
         }
         Some(Rows { lo, n, leaves: out })
@@ -81,7 +81,7 @@ impl Fx<'_> {
         mask: &str,
         plan: &Rows,
     ) -> Vec<(Vec<u32>, String, String)> {
-        let (w, n) = (u64::from(W), plan.n);
+        let (w, n) = (u64::from(w()), plan.n);
         let ptrs = self.row_pointers(at, mask, plan.lo);
         let row_ty = format!("<{n} x i32>");
         let rows: Vec<String> = (0..w)
@@ -117,7 +117,7 @@ impl Fx<'_> {
     /// Words `c * W .. c * W + W` of a row of `n` words, as one `<W x i32>` (poison past
     /// `n`).
     fn chunk(&mut self, row: &str, n: u64, c: u64) -> String {
-        let w = u64::from(W);
+        let w = u64::from(w());
         if n == w && c == 0 {
             return row.to_string();
         }
@@ -142,7 +142,7 @@ impl Fx<'_> {
     /// interleaves input i with input i + W/2, low halves into output 2i and high halves
     /// into output 2i + 1.
     fn transpose_rows(&mut self, mut v: Vec<String>) -> Vec<String> {
-        let w = W as usize;
+        let w = w() as usize;
         let half = w / 2;
         let ty = lanes("i32");
         let mask = |from: usize| -> String {
@@ -183,7 +183,7 @@ impl Fx<'_> {
         plan: &Rows,
         value: &Val,
     ) -> Lowering<()> {
-        let (w, n) = (u64::from(W), plan.n);
+        let (w, n) = (u64::from(w()), plan.n);
         let mut words = vec!["poison".to_string(); n as usize];
         let mut keep = vec!["i1 false"; n as usize];
         for (path, s, word) in &plan.leaves {
@@ -192,7 +192,7 @@ impl Fx<'_> {
             keep[(word - plan.lo) as usize] = "i1 true";
         }
         // Lane k's row, in chunks of W words.
-        let mut pieces: Vec<Vec<String>> = vec![Vec::new(); W as usize];
+        let mut pieces: Vec<Vec<String>> = vec![Vec::new(); w as usize];
         for c in 0..n.div_ceil(w) {
             let chunk: Vec<String> = (c * w..c * w + w)
                 .map(|i| {

@@ -2,14 +2,42 @@
 //! each scalar leaf a `<W x T>` LLVM vector (structure of arrays), and where their scalar
 //! leaves lie in a buffer (the GPU layout the host shares).
 
+use std::cell::Cell;
+
 use naga::{Module, Scalar, ScalarKind, TypeInner, VectorSize};
 
-/// Lanes per block: one AVX2 register of `f32`s. On the AVX-512 machine of BENCHMARKS.md, 8
-/// and 16 lanes rendered the README scene equally fast (1.12 s against 1.16 s), and fewer
-/// lanes waste less where they diverge. 32 (the lowering holds for any power of two up to
-/// 32) gave the same images; there `extend` took 0.83-0.85x as long (0.70-0.72x for `warp`)
-/// and the divergent traversals 1.11-1.15x, so a width per kernel would take both.
-pub const W: u32 = 8;
+/// Lanes per block where no JIT says what the CPU's registers hold (`width`): one AVX2
+/// register of `f32`s.
+pub const DEFAULT_WIDTH: u32 = 8;
+
+/// The widths a lowering takes: powers of two up to 32, the most one `i32` mask word holds.
+pub const WIDTHS: [u32; 3] = [8, 16, 32];
+
+thread_local! {
+    /// The width of the lowering running on this thread (`Width`).
+    static WIDTH: Cell<u32> = const { Cell::new(DEFAULT_WIDTH) };
+}
+
+/// Lanes per block of the kernel being lowered on this thread: every value holds this many.
+pub fn w() -> u32 {
+    WIDTH.with(Cell::get)
+}
+
+/// Sets this thread's lowering width until dropped (one kernel's lowering).
+pub struct Width(u32);
+
+impl Width {
+    pub fn set(lanes: u32) -> Width {
+        debug_assert!(WIDTHS.contains(&lanes), "{lanes} lanes");
+        Width(WIDTH.with(|c| c.replace(lanes)))
+    }
+}
+
+impl Drop for Width {
+    fn drop(&mut self) {
+        WIDTH.with(|c| c.set(self.0));
+    }
+}
 
 pub type Lowering<T> = Result<T, String>;
 
@@ -28,7 +56,7 @@ pub fn scalar(s: Scalar) -> Lowering<&'static str> {
 
 /// `<W x s>`.
 pub fn lanes(s: &str) -> String {
-    format!("<{W} x {s}>")
+    format!("<{} x {s}>", w())
 }
 
 pub fn size_of(v: VectorSize) -> u32 {
@@ -174,12 +202,12 @@ pub fn byte_size(m: &Module, t: &TypeInner) -> u64 {
 /// An LLVM constant vector with every lane `v` (text of the value, without its type).
 pub fn splat_const(s: &str, v: &str) -> String {
     let one = format!("{s} {v}");
-    format!("<{}>", vec![one; W as usize].join(", "))
+    format!("<{}>", vec![one; w() as usize].join(", "))
 }
 
-/// `<0, 1, ..., W-1>` as an `i32` constant vector.
+/// `<0, 1, ..., w()-1>` as an `i32` constant vector.
 pub fn iota() -> String {
-    let parts: Vec<String> = (0..W).map(|i| format!("i32 {i}")).collect();
+    let parts: Vec<String> = (0..w()).map(|i| format!("i32 {i}")).collect();
     format!("<{}>", parts.join(", "))
 }
 
