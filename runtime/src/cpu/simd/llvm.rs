@@ -510,8 +510,6 @@ pub fn save_host_time(key: u64, ns: u64) {
     crate::disk_cache::save(&host_time_file(key), &ns.to_le_bytes());
 }
 
-/// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
-/// usable libLLVM).
 /// 16 where the target has AVX-512 (LLVM's feature list names `+avx512f`), else 8 (AVX2).
 fn register_lanes(features: &str) -> u32 {
     if features.split(',').any(|f| f == "+avx512f") {
@@ -521,6 +519,8 @@ fn register_lanes(features: &str) -> u32 {
     }
 }
 
+/// The process's JIT, opened on first use (`Err` once, with the reason, where there is no
+/// usable libLLVM).
 pub fn jit() -> &'static Result<Jit, String> {
     JIT.get_or_init(open)
 }

@@ -1,6 +1,7 @@
 //! How naga types look in the vector form: every value holds all `W` lanes of a block, with
 //! each scalar leaf a `<W x T>` LLVM vector (structure of arrays), and where their scalar
-//! leaves lie in a buffer (the GPU layout the host shares).
+//! leaves lie in a buffer (the GPU layout the host shares). `W`, here and in the comments of
+//! the lowering, is the width of the kernel being lowered ([`w`]).
 
 use std::cell::Cell;
 
