@@ -23,7 +23,7 @@ export COHORT_CACHE_DIR="${COHORT_CACHE_DIR:-$tmp/cache}"
 echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%FT%TZ); commit $(git rev-parse --short HEAD)"
 render() {
   COHORT_CPU_SIMD=vector COHORT_CPU_SIMD_LANES="$1" "$BIN" render --backend cpu --algorithm "$2" \
-    "${@:3}" --stats text --out "$tmp/w.exr" 2>&1
+    "${@:3}" --stats "$tmp/stats.json" --out "$tmp/w.exr" 2>&1
 }
 for a in $ALGORITHMS; do for w in $WIDTHS; do render "$w" "$a" "$@" >/dev/null; done; done
 for r in $(seq "$ROUNDS"); do for a in $ALGORITHMS; do for w in $WIDTHS; do
