@@ -177,6 +177,51 @@ fn mut_helpers_sort4() {
     for o in outs {
         assert_eq!(o, host);
     }
+    let d = Device::cpu_with(cohort::runtime::cpu::simd::Forms::Vector).unwrap();
+    has_vector_form(sort4::build(&sort4::spec(&d, None)), "sort4");
+}
+
+/// `&mut` helpers over a local array and its depth, each lane at its own depth: the same
+/// digits on every device, and a vector form on the CPU backend (the helpers' pointers are
+/// the caller's per-lane slots).
+#[test]
+fn mut_helpers_bit_stack() {
+    use cohort_tests::kernels::sort4::*;
+    let mut rng = Rng(5);
+    let mut xs: Vec<u32> = (0..517).map(|_| rng.next_u32()).collect();
+    xs.extend([0, 1, 0x80, 0xff, u32::MAX]);
+    let outs = run_all("bit_stack", |d| {
+        let xb = d.upload(&xs).unwrap();
+        let out = d.alloc::<u32>(xs.len()).unwrap();
+        bit_stack::launch(d, xs.len() as u32, &xb, &out).unwrap();
+        d.read(&out).unwrap()
+    });
+    let mut host = vec![0u32; xs.len()];
+    for_each_invocation(xs.len() as u32, 32, Group::Thread, |inv| {
+        bit_stack(inv.global_index, &xs, &mut host)
+    });
+    let want = |x: u32| {
+        (0..8)
+            .rev()
+            .filter(|b| (x >> b) & 1 != 0)
+            .fold(1u32, |r, b| r * 8 + b)
+    };
+    for (i, &x) in xs.iter().enumerate() {
+        assert_eq!(host[i], want(x), "host, x = {x:#x}");
+    }
+    for o in outs {
+        assert_eq!(o, host);
+    }
+    let d = Device::cpu_with(cohort::runtime::cpu::simd::Forms::Vector).unwrap();
+    has_vector_form(bit_stack::build(&bit_stack::spec(&d, None)), "bit_stack");
+}
+
+/// Panics unless the CPU backend lowers `module` to a vector form.
+fn has_vector_form(module: cohort::compiler::ir::BuiltKernel, name: &str) {
+    let compiled = cohort::compiler::compile(&module, name.into()).unwrap();
+    if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+        panic!("{name}: no vector form: {e}");
+    }
 }
 
 #[test]

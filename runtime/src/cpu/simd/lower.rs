@@ -23,7 +23,7 @@ use naga::valid::FunctionInfo;
 use naga::{Block, Function, Handle, Module, Statement, TypeInner};
 
 use super::deferred;
-use super::memory::Place;
+use super::memory::{Place, Root};
 use super::types::{iota, lanes, splat_const, value_type, w, Lowering, Width};
 
 /// Default name of the generated function the backend calls:
@@ -317,7 +317,15 @@ impl<'a> Fx<'a> {
                 let e = self.exec();
                 ops.push(format!("{} {e}", Self::mask_ty()));
                 for &a in arguments {
-                    ops.push(self.val(a)?.typed()?);
+                    match self.val(a)? {
+                        Val::P(p) => {
+                            let at = self.uniform_local(&p).ok_or(
+                                "a pointer argument other than a local at one place in every lane",
+                            )?;
+                            ops.push(format!("ptr {at}"));
+                        }
+                        v => ops.push(v.typed()?),
+                    }
                 }
                 let callee = &self.functions[function];
                 let name = format!("@f{}", function.index());
@@ -455,6 +463,26 @@ pub fn lower(k: &CompiledKernel, symbol: &str, width: u32) -> Lowering<String> {
         let mut params = Vec::new();
         let mut args = Vec::new();
         for (i, a) in f.arguments.iter().enumerate() {
+            // A `&mut` argument of a `#[kernel_fn]` (a pointer to a caller's local) is the
+            // address of the caller's per-lane slot: callees are inlined, so the slot is
+            // promoted to registers as if it were the caller's own.
+            if let TypeInner::Pointer {
+                base,
+                space: naga::AddressSpace::Function,
+            } = m.types[a.ty].inner
+            {
+                let pointee = m.types[base].inner.clone();
+                params.push(format!("ptr %a{i}"));
+                args.push(Val::P(Place {
+                    root: Root::Local {
+                        slot: format!("%a{i}"),
+                        slot_ty: value_type(m, &pointee)?,
+                        path: Vec::new(),
+                    },
+                    ty: pointee,
+                }));
+                continue;
+            }
             let ty = value_type(m, &m.types[a.ty].inner)?;
             params.push(format!("{ty} %a{i}"));
             args.push(Val::r(ty, format!("%a{i}")));

@@ -368,7 +368,7 @@ impl Fx<'_> {
     }
 
     /// The address of a local place whose path is the same for every lane.
-    fn uniform_local(&mut self, p: &Place) -> Option<String> {
+    pub fn uniform_local(&mut self, p: &Place) -> Option<String> {
         let Root::Local {
             slot,
             slot_ty,
