@@ -889,3 +889,61 @@ fn a_signed_index_below_zero_is_out_of_bounds_in_the_vector_form() {
         );
     }
 }
+
+/// An `if` whose arm is a few register operations: the vector form runs it under its mask
+/// without testing for a lane that takes it (`cpu::simd` `straight`).
+#[kernel(workgroup = 64)]
+pub fn small_arm(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [f32]) {
+    let i = gi as usize;
+    let x = xs[i];
+    let mut y = -x;
+    if x > 0.5 {
+        y = x * 2.0 + 1.0;
+    }
+    out[i] = y;
+}
+
+/// The same kernel without the `if`.
+#[kernel(workgroup = 64)]
+pub fn no_arm(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [f32]) {
+    let i = gi as usize;
+    let x = xs[i];
+    out[i] = -x;
+}
+
+/// Lanes that take no arm (whole blocks of them, and blocks where some do) keep their
+/// values when the arm runs without its test, on every device; and the vector form has no
+/// more lane tests (mask reductions) than without the `if`.
+#[test]
+fn small_arms_run_without_a_lane_test() {
+    // Blocks of all-small, all-large and mixed values, whatever the block width.
+    let xs: Vec<f32> = (0..256)
+        .map(|i| match i / 64 {
+            0 => 0.25,
+            1 => 0.75,
+            _ => (i % 3) as f32 * 0.4,
+        })
+        .collect();
+    let want: Vec<f32> = xs
+        .iter()
+        .map(|&x| if x > 0.5 { x * 2.0 + 1.0 } else { -x })
+        .collect();
+    for d in common::devices() {
+        let xb = d.upload(&xs).unwrap();
+        let out = d.alloc::<f32>(xs.len()).unwrap();
+        small_arm::launch(&d, xs.len() as u32, &xb, &out).unwrap();
+        assert_eq!(d.read(&out).unwrap(), want, "{}", d.info().driver);
+    }
+    let d = Device::cpu_with(cohort::runtime::cpu::simd::Forms::Vector).unwrap();
+    let tests = |ir: String| ir.matches("call i1 @llvm.vector.reduce.or").count();
+    let ir = |m, name: &str| {
+        let compiled = cohort::compiler::compile(&m, name.into()).unwrap();
+        cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled).unwrap()
+    };
+    let small = tests(ir(
+        small_arm::build(&small_arm::spec(&d, None)),
+        "small_arm",
+    ));
+    let none = tests(ir(no_arm::build(&no_arm::spec(&d, None)), "no_arm"));
+    assert_eq!(small, none, "lane tests with the small arm and without it");
+}

@@ -4,7 +4,8 @@
 //! onto masks directly:
 //!
 //! - `exec` holds the lanes that run the current statement. An `If` runs each arm with
-//!   `exec` narrowed to the lanes that take it, and skips an arm no lane takes.
+//!   `exec` narrowed to the lanes that take it, and skips an arm no lane takes, unless the
+//!   arm is a few register operations (`straight`), cheaper to run than to test.
 //! - A loop runs while any lane is in it. `break` moves the lanes to the loop's `broken`
 //!   set, `continue` to its `continued` set until `continuing`; when the loop ends, the
 //!   lanes that broke out go on. `return` drops the lanes for the rest of the function.
@@ -22,9 +23,9 @@ use cohort_compiler::CompiledKernel;
 use naga::valid::FunctionInfo;
 use naga::{Block, Function, Handle, Module, Statement, TypeInner};
 
-use super::deferred;
 use super::memory::{Place, Root};
 use super::types::{iota, lanes, splat_const, value_type, w, Lowering, Width};
+use super::{deferred, straight};
 
 /// Default name of the generated function the backend calls:
 /// `run(env, err, first, end, nx, ny, nz)` runs workgroups `first..end` of an
@@ -359,6 +360,10 @@ impl<'a> Fx<'a> {
         self.set_exec(mask);
         if b.is_empty() {
             return Ok(mask.to_string());
+        }
+        if straight::straight(self, b) {
+            self.block(b)?;
+            return Ok(self.exec());
         }
         let (run, done) = (self.label(), self.label());
         let go = self.any(mask);
