@@ -178,6 +178,11 @@ impl RawBuffer {
         RawBuffer(Arc::new(buffer))
     }
 
+    /// A handle to a buffer the backend also holds elsewhere.
+    pub(crate) fn from_arc<B: Any + Send + Sync>(buffer: Arc<B>) -> Self {
+        RawBuffer(buffer)
+    }
+
     /// The backend's buffer, if this handle holds one of type `B`.
     pub(crate) fn get<B: Any + Send + Sync>(&self) -> Option<Arc<B>> {
         self.0.clone().downcast::<B>().ok()

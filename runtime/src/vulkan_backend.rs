@@ -5,10 +5,11 @@
 //! Ownership: `Shared` (see `vulkan_init`, which opens the device) holds the instance, the
 //! logical device and the memory allocator and is destroyed last; every `Buffer` holds an
 //! `Arc<Shared>`, so buffers may outlive the `VkDevice` that made them. `VkDevice` adds the
-//! queue, the command pool and the pipeline cache. All GPU work goes through `VkDevice::run`:
-//! one command buffer, one submission, wait on a fence, reset the pool. Device-local memory
-//! is only touched by copy commands from/to host-visible staging buffers, so there is one
-//! upload path on every GPU.
+//! queue, the command pool and the pipeline cache. Transfers go through `VkDevice::run`:
+//! one command buffer, one submission, wait on a fence, reset the pool; dispatches through
+//! `submit_async`. Device-local memory is only touched by copy commands from/to
+//! host-visible staging buffers, so there is one upload path on every GPU. A new buffer's
+//! zero fill or upload copy waits in [`pending`] for the next submission of either kind.
 
 use std::borrow::Cow;
 use std::ffi::CString;
@@ -29,6 +30,8 @@ use crate::{
     BackendKind, BindingKind, BufferArg, CompiledKernel, DeviceInfo, Dispatch, DispatchStats,
     KernelArtifact, KernelCode, Result, RuntimeError,
 };
+
+mod pending;
 
 const BACKEND: BackendKind = BackendKind::Vulkan;
 
@@ -124,6 +127,9 @@ pub(crate) struct VkDevice {
     pub(crate) pipelines: PipelineCache<Pipeline>,
     shared: Arc<Shared>,
     submitter: Mutex<Submitter>,
+    /// New buffers' fills and copies, recorded by the next submission. Locked after
+    /// `submitter` where both are held.
+    pending: Mutex<pending::Pending>,
     queue_family: u32,
     /// The driver's pipeline cache, loaded from and saved to `cache_file` (`disk_cache`).
     vk_cache: vk::PipelineCache,
@@ -198,6 +204,7 @@ impl VkDevice {
             pipelines: PipelineCache::new(Code::Spirv),
             shared,
             submitter: Mutex::new(submitter),
+            pending: Mutex::default(),
             queue_family: desc.queue_family,
             vk_cache,
             cache_file,
@@ -278,24 +285,13 @@ impl VkDevice {
     fn run(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
         let device = &self.shared.device;
         let s = lock(&self.submitter);
+        // Dropped after the wait below: the fills' and copies' buffers outlive them.
+        let pending = std::mem::take(&mut *lock(&self.pending));
         let mut allocated = None;
         let result = (|| unsafe {
-            let cb = device
-                .allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default()
-                        .command_pool(s.pool)
-                        .level(vk::CommandBufferLevel::PRIMARY)
-                        .command_buffer_count(1),
-                )
-                .vk("vkAllocateCommandBuffers")?[0];
+            let cb = begin_one_time(device, s.pool)?;
             allocated = Some(cb);
-            device
-                .begin_command_buffer(
-                    cb,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )
-                .vk("vkBeginCommandBuffer")?;
+            pending.record(device, cb);
             let all = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
             barrier(
                 device,
@@ -541,6 +537,7 @@ impl VkDevice {
             timestamp_valid_bits: self.timestamp_valid_bits,
             timestamp_period_ns: self.timestamp_period_ns,
             staging: Vec::new(),
+            init: pending::Pending::default(),
             cmds: Vec::new(),
             reads: Vec::new(),
         };
@@ -639,21 +636,7 @@ impl VkDevice {
 
             let query_pool = f.query_pool;
             unsafe {
-                let cb = device
-                    .allocate_command_buffers(
-                        &vk::CommandBufferAllocateInfo::default()
-                            .command_pool(f.pool)
-                            .level(vk::CommandBufferLevel::PRIMARY)
-                            .command_buffer_count(1),
-                    )
-                    .vk("vkAllocateCommandBuffers")?[0];
-                device
-                    .begin_command_buffer(
-                        cb,
-                        &vk::CommandBufferBeginInfo::default()
-                            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                    )
-                    .vk("vkBeginCommandBuffer")?;
+                let cb = begin_one_time(device, f.pool)?;
                 // Earlier submissions' writes (and host writes) are visible to this one.
                 let all = vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE;
                 barrier(
@@ -751,10 +734,21 @@ impl VkDevice {
                     vk::AccessFlags::HOST_READ,
                 );
                 device.end_command_buffer(cb).vk("vkEndCommandBuffer")?;
-                let cbs = [cb];
-                let submit = vk::SubmitInfo::default().command_buffers(&cbs);
                 // The queue needs external synchronisation; the submitter's lock gives it.
                 let s = lock(&self.submitter);
+                // New buffers' fills and copies go first, in a command buffer of their own
+                // recorded under the lock, so that no submission overtakes them; `cb`'s
+                // leading barrier makes their writes visible.
+                f.init = std::mem::take(&mut *lock(&self.pending));
+                let mut cbs = Vec::with_capacity(2);
+                if !f.init.is_empty() {
+                    let init = begin_one_time(device, f.pool)?;
+                    f.init.record(device, init);
+                    device.end_command_buffer(init).vk("vkEndCommandBuffer")?;
+                    cbs.push(init);
+                }
+                cbs.push(cb);
+                let submit = vk::SubmitInfo::default().command_buffers(&cbs);
                 device
                     .queue_submit(s.queue, &[submit], f.fence)
                     .vk("vkQueueSubmit")?;
@@ -782,6 +776,8 @@ pub(crate) struct VkInFlight {
     timestamp_valid_bits: u32,
     timestamp_period_ns: f64,
     staging: Vec<Buffer>,
+    /// New buffers' fills and copies this submission runs first.
+    init: pending::Pending,
     /// Keeps every bound buffer alive until the GPU is done.
     cmds: Vec<Cmd>,
     /// The buffers copied back, and how many bytes of each.
@@ -871,6 +867,34 @@ fn mapped_bytes(buffer: &mut Buffer) -> Result<&mut [u8]> {
         })
 }
 
+/// A primary command buffer from `pool`, begun for one submission.
+///
+/// # Safety
+/// `pool` belongs to `device`, and no other thread uses it meanwhile.
+unsafe fn begin_one_time(device: &ash::Device, pool: vk::CommandPool) -> Result<vk::CommandBuffer> {
+    let cb = unsafe {
+        device.allocate_command_buffers(
+            &vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1),
+        )
+    }
+    .vk("vkAllocateCommandBuffers")?[0];
+    let begun = unsafe {
+        device.begin_command_buffer(
+            cb,
+            &vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+        )
+    };
+    if begun.is_err() {
+        unsafe { device.free_command_buffers(pool, &[cb]) };
+    }
+    begun.vk("vkBeginCommandBuffer")?;
+    Ok(cb)
+}
+
 unsafe fn barrier(
     device: &ash::Device,
     cb: vk::CommandBuffer,
@@ -906,23 +930,22 @@ impl Backend for VkDevice {
 
     /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
     /// start and the rest is zeroed.
+    /// The fill or copy waits for the next submission (`pending`).
     fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
-        let buffer = self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?;
+        let buffer = Arc::new(self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?);
         if init.is_empty() {
-            self.run(|d, cb| unsafe { d.cmd_fill_buffer(cb, buffer.raw, 0, vk::WHOLE_SIZE, 0) })?;
+            lock(&self.pending).zero(buffer.clone());
         } else {
             let mut staging = self.staging(bytes, MemoryLocation::CpuToGpu)?;
             let mapped = mapped_bytes(&mut staging)?;
             mapped[..init.len()].copy_from_slice(init);
             mapped[init.len()..bytes as usize].fill(0);
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: bytes,
-            };
-            self.run(|d, cb| unsafe { d.cmd_copy_buffer(cb, staging.raw, buffer.raw, &[region]) })?;
+            let submit_now = lock(&self.pending).copy(staging, buffer.clone(), bytes);
+            if submit_now {
+                self.run(|_, _| {})?;
+            }
         }
-        Ok(RawBuffer::new(buffer))
+        Ok(RawBuffer::from_arc(buffer))
     }
 
     fn create_uniform_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {

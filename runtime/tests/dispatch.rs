@@ -356,6 +356,43 @@ fn batch_runs_in_order_with_timings() {
     }
 }
 
+/// The Vulkan backend records a new buffer's zero fill or upload copy into the next
+/// submission rather than submitting it alone: it must still land before a batch that is
+/// the first to use the buffer, and before a write to it. The memory handed out here held
+/// data before, so a fill that is missing or comes too late shows.
+#[test]
+fn new_buffers_are_ready_for_the_first_batch_and_write() {
+    let inc = affine_kernel("inc", 1, 1);
+    let n = 4096usize;
+    for dev in devices() {
+        let old = dev.upload(&vec![0xdead_beef_u32; n]).unwrap();
+        assert_eq!(dev.read(&old).unwrap()[n - 1], 0xdead_beef, "{dev:?}");
+        drop(old);
+        let zeroed: GpuBuffer<u32> = dev.alloc(n).unwrap();
+        let data: Vec<u32> = (0..n as u32).map(|i| i * 3).collect();
+        let uploaded = dev.upload(&data).unwrap();
+        let mut batch = dev.batch();
+        for b in [&zeroed, &uploaded] {
+            batch
+                .dispatch(&inc, &[b.arg()], Dispatch::Groups(groups_for(n, 64)))
+                .unwrap();
+        }
+        batch.submit().unwrap();
+        let z = dev.read(&zeroed).unwrap();
+        assert!(z.iter().all(|&v| v == 1), "{dev:?}: {:?}", &z[..4]);
+        let u = dev.read(&uploaded).unwrap();
+        let wrong = (0..n).find(|&i| u[i] != data[i] + 1);
+        assert_eq!(wrong, None, "{dev:?}: {:?}", &u[..4]);
+        drop((zeroed, uploaded));
+        let written: GpuBuffer<u32> = dev.alloc(n).unwrap();
+        dev.write(&written, 5, &[7, 8]).unwrap();
+        let back = dev.read(&written).unwrap();
+        assert_eq!(&back[4..8], &[0, 7, 8, 0], "{dev:?}");
+        assert_eq!(back.iter().filter(|&&v| v != 0).count(), 2, "{dev:?}");
+        assert_validation_clean(&dev);
+    }
+}
+
 #[test]
 fn batch_keeps_dropped_buffers_alive_until_submit() {
     let inc = affine_kernel("inc", 1, 1);
