@@ -437,7 +437,7 @@ pub fn shared_direction(#[builtin(global_index)] gi: u32, p: &PickParams, out: &
 /// CPU forms give the host run's bits: one value per group, the leader's.
 #[test]
 fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
-    use cohort::runtime::cpu::simd::{lower_to_llvm_ir, Forms};
+    use cohort::runtime::cpu::simd::Forms;
     use cohort::Group;
     let n = 1000u32;
     let p = PickParams { seed: 0x5eed, n };
@@ -463,12 +463,8 @@ fn group_shares_run_in_the_vector_form_with_the_leaders_bits() {
             let d = Device::cpu_with(forms).unwrap();
             let spec = shared_direction::spec(&d, Some(group));
             assert!(spec.recompute_group_share, "{group:?}");
-            let compiled = cohort::compiler::compile(
-                &shared_direction::build(&spec),
-                "shared_direction".into(),
-            )
-            .unwrap();
-            if let Err(e) = lower_to_llvm_ir(&compiled) {
+            if let Err(e) = common::vector_form(&shared_direction::build(&spec), "shared_direction")
+            {
                 panic!("{group:?}: no vector form: {e}");
             }
             let out = d.upload(&vec![Vec4::splat(-1.0); n as usize]).unwrap();
@@ -589,10 +585,7 @@ fn transcendentals_of_uniform_and_varying_arguments_keep_their_bits() {
     for forms in [Forms::Host, Forms::Vector] {
         let d = Device::cpu_with(forms).unwrap();
         let spec = transcendentals::spec(&d, None);
-        let compiled =
-            cohort::compiler::compile(&transcendentals::build(&spec), "transcendentals".into())
-                .unwrap();
-        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+        if let Err(e) = common::vector_form(&transcendentals::build(&spec), "transcendentals") {
             panic!("no vector form: {e}");
         }
         let xs_b = d.upload(&xs).unwrap();
@@ -743,9 +736,7 @@ fn deferred_atomic_adds_end_at_the_sums_and_an_invocation_sees_its_own() {
         for forms in [Forms::Host, Forms::Vector] {
             let d = Device::cpu_with(forms).unwrap();
             let spec = tallies::spec(&d, None);
-            let compiled =
-                cohort::compiler::compile(&tallies::build(&spec), "tallies".into()).unwrap();
-            let ir = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled)
+            let ir = common::vector_form(&tallies::build(&spec), "tallies")
                 .unwrap_or_else(|e| panic!("no vector form: {e}"));
             assert!(
                 ir.contains("cohort_flush"),
@@ -788,9 +779,7 @@ fn atomic_adds_return_every_old_value_once() {
     for forms in [Forms::Host, Forms::Vector] {
         let d = Device::cpu_with(forms).unwrap();
         let spec = counters::spec(&d, None);
-        let compiled =
-            cohort::compiler::compile(&counters::build(&spec), "counters".into()).unwrap();
-        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+        if let Err(e) = common::vector_form(&counters::build(&spec), "counters") {
             panic!("no vector form: {e}");
         }
         let counts = d.alloc::<u32>(5).unwrap();
@@ -936,10 +925,7 @@ fn small_arms_run_without_a_lane_test() {
     }
     let d = Device::cpu_with(cohort::runtime::cpu::simd::Forms::Vector).unwrap();
     let tests = |ir: String| ir.matches("call i1 @llvm.vector.reduce.or").count();
-    let ir = |m, name: &str| {
-        let compiled = cohort::compiler::compile(&m, name.into()).unwrap();
-        cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled).unwrap()
-    };
+    let ir = |m, name: &str| common::vector_form(&m, name).unwrap();
     let small = tests(ir(
         small_arm::build(&small_arm::spec(&d, None)),
         "small_arm",

@@ -218,8 +218,7 @@ fn mut_helpers_bit_stack() {
 
 /// Panics unless the CPU backend lowers `module` to a vector form.
 fn has_vector_form(module: cohort::compiler::ir::BuiltKernel, name: &str) {
-    let compiled = cohort::compiler::compile(&module, name.into()).unwrap();
-    if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+    if let Err(e) = vector_form(&module, name) {
         panic!("{name}: no vector form: {e}");
     }
 }

@@ -129,3 +129,13 @@ pub const fn ir_kernel_info(
         finite_loops: false,
     }
 }
+
+/// The CPU backend's vector form of `module` as LLVM IR (what its object cache compiles),
+/// or why the lowering gives it none, in which case the kernel runs its host form.
+pub fn vector_form(
+    module: &cohort::compiler::ir::BuiltKernel,
+    name: &str,
+) -> Result<String, String> {
+    let compiled = cohort::compiler::compile(module, name.into()).unwrap();
+    cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled)
+}
