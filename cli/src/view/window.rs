@@ -353,6 +353,14 @@ impl App {
         buffer
             .present()
             .map_err(|e| format!("cannot present the window: {e}"))?;
+        // softbuffer's X11 present only queues the image for the X server; asking for the
+        // next buffer waits until the server has drawn it. Only then is the frame
+        // `presented` (what a script's `wait-paths` waits for, and what a screenshot after
+        // `notify` captures): on a loaded machine, a screenshot taken at once could still
+        // show the previous frame.
+        surface
+            .buffer_mut()
+            .map_err(|e| format!("cannot draw into the window: {e}"))?;
         self.on_screen = Some((ww, wh, shown));
         *self.shared.presented.lock().unwrap() = Some(Presented {
             generation: frame.generation,
