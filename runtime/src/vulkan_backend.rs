@@ -929,8 +929,8 @@ impl Backend for VkDevice {
     }
 
     /// `bytes` is already the padded allocation size; `init` (possibly empty) fills its
-    /// start and the rest is zeroed.
-    /// The fill or copy waits for the next submission (`pending`).
+    /// start and the rest is zeroed, by a fill or copy that waits for the next submission
+    /// (`pending`).
     fn create_buffer(&self, bytes: u64, init: &[u8]) -> Result<RawBuffer> {
         let buffer = Arc::new(self.new_buffer(bytes, BUFFER_USAGE, MemoryLocation::GpuOnly)?);
         if init.is_empty() {

@@ -4,6 +4,8 @@
 //! re-validates through naga's own front end. (Executing them is the difftests' job; the
 //! renderer's kernels, locked here too, run in `cohort-render`'s tests.)
 
+mod common;
+
 use cohort_tests::variants;
 use std::process::Command;
 
@@ -274,9 +276,7 @@ fn renderer_kernels_have_a_vector_form() {
     let excluded = ["barriers or subgroup operations", "workgroup memory"];
     let mut lowered = 0;
     for v in renderer_variants() {
-        let built = (v.build)(&v.spec);
-        let compiled = cohort::compiler::compile(&built, v.name.clone()).unwrap();
-        match cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+        match common::vector_form(&(v.build)(&v.spec), &v.name) {
             Ok(ir) => {
                 assert!(ir.contains("define void @cohort_run("), "{}", v.name);
                 lowered += 1;
@@ -309,8 +309,7 @@ fn coherent_shading_has_a_vector_form_on_the_cpu() {
             extend::spec(&cpu, Some(group)).with_constants(&[SHADES_ALL | SHADES_GROUP_DRAWS]);
         assert!(spec.recompute_group_share, "{group:?}");
         let built = extend::build::<CoherentCosine, EachPath, NextEvent>(&spec);
-        let compiled = cohort::compiler::compile(&built, format!("extend {group:?}")).unwrap();
-        if let Err(e) = cohort::runtime::cpu::simd::lower_to_llvm_ir(&compiled) {
+        if let Err(e) = common::vector_form(&built, &format!("extend {group:?}")) {
             panic!("{group:?}: no vector form: {e}");
         }
     }
