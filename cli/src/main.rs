@@ -24,6 +24,7 @@ mod choices;
 mod compare;
 mod devices;
 mod figures;
+mod forms;
 mod merge;
 mod options;
 mod view;
@@ -661,6 +662,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
             devices.len()
         );
     }
+    let form_counts = forms::counts(&devices);
+    if !form_counts.is_empty() {
+        println!("cpu forms      {}", forms::line(&form_counts));
+    }
     println!(
         "mean radiance  {:.4} {:.4} {:.4}",
         image.mean().x,
@@ -696,6 +701,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "wall_s": stats.wall.as_secs_f64(), "outputs_s": written.as_secs_f64(),
             "host_ms": { "batches": stats.host.batches, "record": ms(stats.host.record), "submit": ms(stats.host.submit), "wait": ms(stats.host.wait) },
             "startup_s": startup_json,
+            "cpu_forms": forms::json(&form_counts),
             "shading": cohort_render::shading::label(startup.shading),
             "scene_integrator": {
                 "max_depth": scene.integrator.max_depth, "rr_depth": scene.integrator.rr_depth,

@@ -210,6 +210,9 @@ fn renders_and_writes_outputs() {
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["width"], 24);
     assert_eq!(json["paths_per_pixel"], 2.0);
+    // Forms are the CPU backend's alone.
+    assert_eq!(json["cpu_forms"], serde_json::json!({}));
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("cpu forms"));
     // Each pipeline thread's time, by its kernels' names: the stages this render uses.
     let kernels = json["startup_s"]["kernels"].as_object().unwrap();
     for stage in ["init_paths", "traverse", "extend"] {
@@ -785,6 +788,21 @@ fn the_wavefront_is_chosen_and_reported() {
             serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
         assert_eq!(json["slots"], slots, "--wavefront {wavefront}");
         assert_eq!(json["paths_per_pixel"], 4.0);
+        // The CPU backend says which form ran each dispatch: one traversal and one
+        // `extend` per iteration.
+        assert!(text.contains("cpu forms      init_paths "), "{text}");
+        let forms = json["cpu_forms"].as_object().unwrap();
+        for stage in ["traverse", "extend"] {
+            let (_, c) = forms
+                .iter()
+                .find(|(k, _)| k.starts_with(stage))
+                .unwrap_or_else(|| panic!("no {stage} in {forms:?}"));
+            let total: u64 = ["vector", "host", "pending", "host_only"]
+                .iter()
+                .map(|f| c[f].as_u64().unwrap())
+                .sum();
+            assert_eq!(json["iterations"], total, "{stage}: {c}");
+        }
     }
     let out = cohort()
         .args(["render", "--backend", "cpu", "--wavefront", "0"])

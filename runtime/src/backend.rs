@@ -50,6 +50,12 @@ pub(crate) trait Backend: Send + Sync {
         0
     }
 
+    /// How many dispatches of each kernel ran in each form: the CPU backend's; no other
+    /// backend has forms.
+    fn form_counts(&self) -> Vec<crate::cpu::simd::FormCount> {
+        Vec::new()
+    }
+
     /// Words of the print buffer a printing dispatch gets.
     fn print_buffer_words(&self) -> usize {
         crate::print::buffer_words()

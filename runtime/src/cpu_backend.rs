@@ -79,6 +79,7 @@ pub(crate) struct CpuDevice {
     /// Invocations per block of the vector forms (one of `cpu::simd::WIDTHS`).
     lanes: u32,
     chooser: cpu::simd::Chooser,
+    ran: cpu::simd::FormCounts,
 }
 
 thread_local! {
@@ -146,6 +147,7 @@ impl CpuDevice {
             forms,
             lanes,
             chooser: Default::default(),
+            ran: Default::default(),
         })
     }
 
@@ -265,6 +267,18 @@ impl CpuDevice {
             _ => unreachable!("record_cmd keeps a command only with a form to run"),
         };
         if ran.is_ok() {
+            self.ran.add(
+                &cmd.name,
+                match (vector, ready) {
+                    (true, _) => cpu::simd::Ran::Vector,
+                    (false, cpu::simd::Ready::Vector(_)) => cpu::simd::Ran::Host,
+                    (false, cpu::simd::Ready::NotYet) => cpu::simd::Ran::Pending,
+                    (false, cpu::simd::Ready::Never) if self.forms == cpu::simd::Forms::Host => {
+                        cpu::simd::Ran::Host
+                    }
+                    (false, cpu::simd::Ready::Never) => cpu::simd::Ran::HostOnly,
+                },
+            );
             let ns = start.elapsed().as_nanos() as u64;
             match (ready, &cmd.code) {
                 (cpu::simd::Ready::Vector(_), _) if cmd.host.is_some() => {
@@ -372,6 +386,10 @@ impl Backend for CpuDevice {
     fn prepare(&self, kernel: &KernelArtifact) -> Result<()> {
         self.simd_form(&compiled_code(kernel), kernel.host.is_some());
         Ok(())
+    }
+
+    fn form_counts(&self) -> Vec<cpu::simd::FormCount> {
+        self.ran.get()
     }
 
     /// The lanes' `println!` prints directly, so the print buffer stays empty.

@@ -376,6 +376,12 @@ impl Device {
     pub fn cached_pipeline_count(&self) -> usize {
         self.backend.cached_pipeline_count()
     }
+
+    /// On the CPU backend, how many of each kernel's dispatches so far ran its vector
+    /// form and how many its host form, and why (empty on the other backends).
+    pub fn form_counts(&self) -> Vec<crate::cpu::simd::FormCount> {
+        self.backend.form_counts()
+    }
 }
 
 fn elem_bytes<T>(len: usize) -> u64 {

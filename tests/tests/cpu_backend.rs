@@ -213,6 +213,69 @@ fn a_cpu_device_runs_the_vector_width_it_was_opened_with() {
     );
 }
 
+/// A CPU device counts each kernel's dispatches by the form that ran them (`cohort render`
+/// prints them): host forms only under `Forms::Host`; vector forms only under
+/// `Forms::Vector`, where libLLVM is there, except for a kernel with subgroup operations,
+/// which has no vector form; every dispatch once under the measured choice. The other
+/// backends have no forms to count.
+#[test]
+fn a_cpu_device_counts_the_dispatches_of_each_form() {
+    use cohort::runtime::cpu::simd::{FormCount, Forms};
+    use cohort_tests::kernels::saxpy::{saxpy, SaxpyParams};
+    let run = |d: &Device| {
+        let p = SaxpyParams { a: 2.0, n: 200 };
+        let x = d.upload(&[1.0f32; 200]).unwrap();
+        let y = d.upload(&[0.5f32; 200]).unwrap();
+        let out = d.alloc::<UVec4>(128).unwrap();
+        for _ in 0..5 {
+            saxpy::launch(d, 200u32, &p, &x, &y).unwrap();
+            divergent_subgroups::launch(d, 128u32, &out).unwrap();
+        }
+        assert_eq!(d.read(&y).unwrap()[199], 0.5 + 5.0 * 2.0);
+        d.form_counts()
+    };
+    let named = |counts: &[FormCount], prefix: &str| -> FormCount {
+        let c = counts.iter().find(|c| c.kernel.starts_with(prefix));
+        c.unwrap_or_else(|| panic!("no count for {prefix}: {counts:?}"))
+            .clone()
+    };
+    let host = run(&Device::cpu_with(Forms::Host).unwrap());
+    assert_eq!(host.len(), 2, "{host:?}");
+    for k in ["saxpy", "divergent_subgroups"] {
+        let c = named(&host, k);
+        assert_eq!(
+            (c.vector, c.host, c.pending, c.host_only),
+            (0, 5, 0, 0),
+            "{c:?}"
+        );
+    }
+    let measured = run(&Device::cpu_with(Forms::Measured).unwrap());
+    let c = named(&measured, "saxpy");
+    assert_eq!(c.vector + c.host + c.pending + c.host_only, 5, "{c:?}");
+    if cohort::runtime::cpu::simd::llvm_library().is_ok() {
+        let vector = run(&Device::cpu_with(Forms::Vector).unwrap());
+        let c = named(&vector, "saxpy");
+        assert_eq!(
+            (c.vector, c.host, c.pending, c.host_only),
+            (5, 0, 0, 0),
+            "{c:?}"
+        );
+        let c = named(&vector, "divergent_subgroups");
+        assert_eq!(
+            (c.vector, c.host, c.pending, c.host_only),
+            (0, 0, 0, 5),
+            "{c:?}"
+        );
+        let c = named(&measured, "divergent_subgroups");
+        assert_eq!(c.host_only, 5, "{c:?}");
+    }
+    for d in common::devices() {
+        if d.info().backend != BackendKind::Cpu {
+            assert!(d.form_counts().is_empty());
+        }
+    }
+}
+
 /// Which kernels the CPU backend runs as coroutines: those whose invocations wait for each
 /// other (barriers, subgroup operations, `group_any` above thread level). `group_share`
 /// alone makes none wait at any level, because each invocation computes its group's

@@ -81,6 +81,64 @@ impl Trial {
     }
 }
 
+/// How many dispatches of one kernel ran in each form on a CPU device
+/// (`Device::form_counts`): what a render's speed on the CPU backend depends on.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FormCount {
+    /// The kernel's artifact name.
+    pub kernel: String,
+    /// In its vector form.
+    pub vector: u64,
+    /// In its host form, chosen: it measured faster, or `COHORT_CPU_SIMD=host`.
+    pub host: u64,
+    /// In its host form while its vector form was not compiled yet (it compiles once the
+    /// host form has run for about as long as the compile takes, or comes from the cache
+    /// of an earlier run).
+    pub pending: u64,
+    /// In its host form because it has no vector form (`COHORT_CPU_SIMD_LOG=1` says why).
+    pub host_only: u64,
+}
+
+/// Which [`FormCount`] field a dispatch counts in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ran {
+    Vector,
+    Host,
+    Pending,
+    HostOnly,
+}
+
+/// The dispatches of a device's kernels by form, in the order the kernels first ran.
+#[derive(Default)]
+pub struct FormCounts(Mutex<Vec<FormCount>>);
+
+impl FormCounts {
+    pub fn add(&self, kernel: &str, ran: Ran) {
+        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let i = match v.iter().position(|c| c.kernel == kernel) {
+            Some(i) => i,
+            None => {
+                v.push(FormCount {
+                    kernel: kernel.to_string(),
+                    ..Default::default()
+                });
+                v.len() - 1
+            }
+        };
+        let c = &mut v[i];
+        *match ran {
+            Ran::Vector => &mut c.vector,
+            Ran::Host => &mut c.host,
+            Ran::Pending => &mut c.pending,
+            Ran::HostOnly => &mut c.host_only,
+        } += 1;
+    }
+
+    pub fn get(&self) -> Vec<FormCount> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+}
+
 /// The measured choices of one device, by kernel name.
 #[derive(Default)]
 pub struct Chooser {

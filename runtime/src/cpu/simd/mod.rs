@@ -23,7 +23,7 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use cohort_compiler::CompiledKernel;
 
-pub use choice::{Chooser, Forms};
+pub use choice::{Chooser, FormCount, FormCounts, Forms, Ran};
 pub use llvm::stop_compiles;
 pub use types::WIDTHS;
 pub use width::default_lanes;
