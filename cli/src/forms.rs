@@ -23,24 +23,26 @@ pub fn counts(devices: &[Device]) -> Vec<FormCount> {
     all
 }
 
-/// One line: each kernel (its name up to the specialisation, as `startup` names it) with
-/// its dispatches per form.
+/// One line: each kernel, by its function's name (the artifact name up to its
+/// specialisation), with its dispatches per form.
 pub fn line(counts: &[FormCount]) -> String {
     counts
         .iter()
         .map(|c| {
             let name = c.kernel.split("__").next().unwrap_or(&c.kernel);
-            let mut parts = Vec::new();
-            for (n, what) in [
-                (c.vector, "vector"),
-                (c.host, "host"),
-                (c.pending, "host while the vector form was not compiled yet"),
-                (c.host_only, "host (no vector form)"),
-            ] {
-                if n > 0 {
-                    parts.push(format!("{n} {what}"));
-                }
-            }
+            let parts: Vec<String> = c
+                .by_form()
+                .into_iter()
+                .filter(|&(_, n)| n > 0)
+                .map(|(form, n)| {
+                    let what = match form {
+                        "pending" => "host while the vector form was not compiled yet",
+                        "host_only" => "host (no vector form)",
+                        other => other,
+                    };
+                    format!("{n} {what}")
+                })
+                .collect();
             format!("{name} {}", parts.join(" + "))
         })
         .collect::<Vec<_>>()
@@ -52,10 +54,11 @@ pub fn json(counts: &[FormCount]) -> serde_json::Value {
     counts
         .iter()
         .map(|c| {
-            (
-                c.kernel.clone(),
-                serde_json::json!({ "vector": c.vector, "host": c.host, "pending": c.pending, "host_only": c.host_only }),
-            )
+            let forms = c
+                .by_form()
+                .into_iter()
+                .map(|(f, n)| (f.to_string(), n.into()));
+            (c.kernel.clone(), serde_json::Map::from_iter(forms).into())
         })
         .collect::<serde_json::Map<_, _>>()
         .into()

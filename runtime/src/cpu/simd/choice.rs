@@ -99,9 +99,21 @@ pub struct FormCount {
     pub host_only: u64,
 }
 
+impl FormCount {
+    /// Each count by its field's name, in field order (`--stats` writes them so).
+    pub fn by_form(&self) -> [(&'static str, u64); 4] {
+        [
+            ("vector", self.vector),
+            ("host", self.host),
+            ("pending", self.pending),
+            ("host_only", self.host_only),
+        ]
+    }
+}
+
 /// Which [`FormCount`] field a dispatch counts in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ran {
+pub(crate) enum Ran {
     Vector,
     Host,
     Pending,
@@ -110,7 +122,7 @@ pub enum Ran {
 
 /// The dispatches of a device's kernels by form, in the order the kernels first ran.
 #[derive(Default)]
-pub struct FormCounts(Mutex<Vec<FormCount>>);
+pub(crate) struct FormCounts(Mutex<Vec<FormCount>>);
 
 impl FormCounts {
     pub fn add(&self, kernel: &str, ran: Ran) {

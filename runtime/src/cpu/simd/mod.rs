@@ -23,7 +23,8 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use cohort_compiler::CompiledKernel;
 
-pub use choice::{Chooser, FormCount, FormCounts, Forms, Ran};
+pub use choice::{Chooser, FormCount, Forms};
+pub(crate) use choice::{FormCounts, Ran};
 pub use llvm::stop_compiles;
 pub use types::WIDTHS;
 pub use width::default_lanes;
