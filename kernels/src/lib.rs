@@ -32,6 +32,7 @@ pub mod path_end;
 pub mod perturb;
 pub mod queues;
 pub mod reorder;
+pub mod retire;
 pub mod rng;
 pub mod sampling;
 pub mod scatter;

@@ -1,9 +1,18 @@
 //! Stream compaction on the GPU (both backends) against a host stable partition: sizes
 //! around the block and word boundaries, several flag densities (all 0, all 1, sparse,
 //! dense, half), `count[0]` below the launched size, and nothing written past the end.
+//!
+//! Retiring finished slots (`cohort_kernels::retire`, the compaction over flags of slots
+//! not done) against a host filter: the new list is the listed slots whose state is not
+//! done, in list order, then the done ones; the new count is the number not done. Lists
+//! shorter than the launched size, lists that are a permutation of a subset of the slots,
+//! all done and none done, and state words whose other bits are set.
 
 use cohort::runtime::{BackendKind, Device};
 use cohort_kernels::compact::{record, scratch_len, specs, BLOCK, DISPATCHES};
+use cohort_kernels::layout::DONE;
+use cohort_kernels::retire;
+use glam::UVec4;
 
 const SIZES: &[u32] = &[0, 1, 31, 255, 256, 257, 1000, 4097, 100_003, 1 << 20];
 /// Probability of flag 1, in 1/1000.
@@ -116,14 +125,104 @@ fn check(kind: BackendKind) {
     }
 }
 
+/// One case: `slots` slots, `n` of them listed (in a shuffled order), the list launched
+/// over `launched >= n` entries, each slot done with probability `done`/1000.
+fn retire_case(d: &Device, rng: &mut Rng, slots: u32, n: u32, launched: u32, done: u32) {
+    let state: Vec<UVec4> = (0..slots)
+        .map(|_| {
+            let flags = if rng.next() % 1000 < done { DONE } else { 0 };
+            // Other bits of w (a path's status flags) must not count as done.
+            UVec4::new(
+                rng.next(),
+                rng.next(),
+                rng.next(),
+                flags | (rng.next() & !DONE),
+            )
+        })
+        .collect();
+    let mut ids: Vec<u32> = (0..slots).collect();
+    for i in (1..ids.len()).rev() {
+        ids.swap(i, rng.next() as usize % (i + 1));
+    }
+    ids.resize(launched as usize, SENTINEL);
+    let listed = &ids[..n as usize];
+    let live = |s: &&u32| state[**s as usize].w & DONE == 0;
+    let mut want: Vec<u32> = listed.iter().filter(live).copied().collect();
+    let want_count = want.len() as u32;
+    want.extend(listed.iter().filter(|s| !live(s)));
+
+    let len = launched as usize;
+    let count = d.upload(&[n]).unwrap();
+    let ids_buf = d.upload(&ids).unwrap();
+    let state_buf = d.upload(&state).unwrap();
+    // Stale flags, scratch and count must not matter.
+    let flags = d.upload(&vec![SENTINEL; len]).unwrap();
+    let scratch = d.upload(&vec![SENTINEL; scratch_len(len)]).unwrap();
+    let out_count = d.upload(&[SENTINEL]).unwrap();
+    let out = d.upload(&vec![SENTINEL; len]).unwrap();
+    let mut b = d.batch();
+    retire::record(
+        &mut b,
+        &retire::spec(d),
+        &specs(d),
+        launched,
+        &count,
+        &ids_buf,
+        &state_buf,
+        &flags,
+        &scratch,
+        &out_count,
+        &out,
+    )
+    .unwrap();
+    assert_eq!(b.submit().unwrap().len(), retire::DISPATCHES);
+    let got = d.read(&out).unwrap();
+    let got_count = d.read(&out_count).unwrap()[0];
+    let what = format!(
+        "{}: {slots} slots, {n} listed (launched {launched}), {done}/1000 done",
+        d.info().adapter_name
+    );
+    assert_eq!(got_count, want_count, "{what}: wrong count");
+    assert_eq!(&got[..n as usize], &want[..], "{what}: wrong list");
+    assert!(
+        got[n as usize..].iter().all(|&v| v == SENTINEL),
+        "{what}: written past the list"
+    );
+    // The list the renderer reads next is exactly the live slots.
+    assert!(got[..got_count as usize]
+        .iter()
+        .all(|&s| state[s as usize].w & DONE == 0));
+}
+
+fn check_retire(kind: BackendKind) {
+    let Some(d) = Device::for_tests(kind) else {
+        return;
+    };
+    let mut rng = Rng(0x51ED_2701_A3C4_9B17);
+    for (slots, n, launched) in [
+        (0, 0, 0),
+        (1, 1, 1),
+        (300, 300, 300),
+        (5000, 4097, 4097),
+        (5000, 1000, 4097),
+        (70_000, 65_536, 65_536),
+    ] {
+        for done in [0, 1000, 500, 30, 970] {
+            retire_case(&d, &mut rng, slots, n, launched, done);
+        }
+    }
+}
+
 #[test]
 fn compaction_wgpu() {
     check(BackendKind::Wgpu);
+    check_retire(BackendKind::Wgpu);
 }
 
 #[test]
 fn compaction_vulkan() {
     check(BackendKind::Vulkan);
+    check_retire(BackendKind::Vulkan);
 }
 
 /// The native CPU backend runs the same kernels (subgroup scans, barriers and workgroup
@@ -131,4 +230,5 @@ fn compaction_vulkan() {
 #[test]
 fn compaction_cpu() {
     check(BackendKind::Cpu);
+    check_retire(BackendKind::Cpu);
 }

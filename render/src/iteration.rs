@@ -15,7 +15,7 @@ use cohort_kernels::reorder;
 use cohort_kernels::sampling::DiffuseSampler;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
-use cohort_kernels::{compact, queues};
+use cohort_kernels::{compact, queues, retire};
 
 use crate::kernels::{extend_set, Specs};
 use crate::paths::Paths;
@@ -35,7 +35,8 @@ pub(crate) enum Stage {
     Extend,
     /// Occlusion of the light samples; finish the slots (next-event estimation only).
     Shadow,
-    /// Stable partition of the live rays.
+    /// Stable partition of the live rays: compaction (`RenderOptions::compact`), or the
+    /// retirement of finished slots from the live list (`cohort_kernels::retire`).
     Compact,
 }
 
@@ -84,6 +85,9 @@ pub(crate) struct Wavefront<'a> {
     pub(crate) reorder_every: u32,
     /// Shade over material queues (`RenderOptions::shading`).
     pub(crate) queues: bool,
+    /// At least the entries of the current list (the slots, or fewer once finished
+    /// slots are retired): every stage's grid.
+    pub(crate) listed: u32,
 }
 
 impl<'a> Wavefront<'a> {
@@ -95,16 +99,46 @@ impl<'a> Wavefront<'a> {
         cur: usize,
     ) -> Result<usize, RenderError> {
         let live = &self.paths.idrays[cur];
-        let traced = self.reorder(b, live)?;
-        self.traverse(b, traced)?;
-        self.extend::<S, E, I>(b, live)?;
+        let count = &self.paths.counts[cur];
+        let traced = self.reorder(b, count, live)?;
+        self.traverse(b, count, traced)?;
+        self.extend::<S, E, I>(b, count, live)?;
         if I::NEE {
-            self.shadow(b, live)?;
+            self.shadow(b, count, live)?;
         }
         if !self.compaction {
             return Ok(cur);
         }
-        self.compact(b, live, &self.paths.idrays[1 - cur])?;
+        self.compact(b, count, live, &self.paths.idrays[1 - cur])?;
+        Ok(1 - cur)
+    }
+
+    /// Records the retirement of the finished slots from list `cur`
+    /// (`cohort_kernels::retire`): the other list receives the slots not done, and its
+    /// count their number. Returns the other list's index. Not with compaction, whose
+    /// lists keep every slot.
+    pub(crate) fn retire(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        cur: usize,
+    ) -> Result<usize, RenderError> {
+        debug_assert!(!self.compaction);
+        let p = self.paths;
+        b.stage(Stage::Compact, |b| {
+            retire::record(
+                b,
+                &self.specs.live,
+                &self.specs.compact,
+                self.listed,
+                &p.counts[cur],
+                &p.idrays[cur],
+                &p.state,
+                &p.flags,
+                &p.block_sums,
+                &p.counts[1 - cur],
+                &p.idrays[1 - cur],
+            )
+        })?;
         Ok(1 - cur)
     }
 
@@ -114,6 +148,7 @@ impl<'a> Wavefront<'a> {
     fn reorder(
         &self,
         b: &mut LabelledBatch<'_>,
+        count: &GpuBuffer<u32>,
         live: &'a GpuBuffer<u32>,
     ) -> Result<&'a GpuBuffer<u32>, RenderError> {
         let every = self.reorder_every;
@@ -127,8 +162,8 @@ impl<'a> Wavefront<'a> {
             reorder::record(
                 b,
                 &self.specs.reorder,
-                self.frame.slots,
-                &p.count,
+                self.listed,
+                count,
                 live,
                 &p.state,
                 &p.ray_o,
@@ -144,16 +179,17 @@ impl<'a> Wavefront<'a> {
     fn traverse(
         &self,
         b: &mut LabelledBatch<'_>,
+        count: &GpuBuffer<u32>,
         traced: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
-        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.frame.slots);
+        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.listed);
         b.stage(Stage::Traverse, |b| match &s.nodes8 {
             Some(n8) => traverse8::record(
                 b,
                 &self.specs.traverse8,
                 n,
                 f,
-                &p.count,
+                count,
                 traced,
                 &p.state,
                 &p.ray_o,
@@ -167,7 +203,7 @@ impl<'a> Wavefront<'a> {
                 &self.specs.traverse,
                 n,
                 f,
-                &p.count,
+                count,
                 traced,
                 &p.state,
                 &p.ray_o,
@@ -185,20 +221,21 @@ impl<'a> Wavefront<'a> {
     fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
         &self,
         b: &mut LabelledBatch<'_>,
+        count: &GpuBuffer<u32>,
         live: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
         let (s, p) = (self.scene, self.paths);
         let Some(q) = p.queues.as_ref().filter(|_| self.queues) else {
-            let all = Grid::Threads(self.frame.slots);
+            let all = Grid::Threads(self.listed);
             let set = extend_set(s, self.frame);
-            return self.shade::<S, E, I>(b, all, set, &p.count, live);
+            return self.shade::<S, E, I>(b, all, set, count, live);
         };
         b.stage(Stage::Queue, |b| {
             queues::record(
                 b,
                 &self.specs.queues,
-                self.frame.slots,
-                &p.count,
+                self.listed,
+                count,
                 live,
                 &p.state,
                 &p.hits,
@@ -262,15 +299,20 @@ impl<'a> Wavefront<'a> {
     }
 
     /// Traces the shadow rays of the `live` slots and adds the unoccluded light samples.
-    fn shadow(&self, b: &mut LabelledBatch<'_>, live: &GpuBuffer<u32>) -> Result<(), RenderError> {
-        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.frame.slots);
+    fn shadow(
+        &self,
+        b: &mut LabelledBatch<'_>,
+        count: &GpuBuffer<u32>,
+        live: &GpuBuffer<u32>,
+    ) -> Result<(), RenderError> {
+        let (s, f, p, n) = (self.scene, self.frame, self.paths, self.listed);
         b.stage(Stage::Shadow, |b| match &s.nodes8 {
             Some(n8) => trace_shadow8::record(
                 b,
                 &self.specs.shadow8,
                 n,
                 f,
-                &p.count,
+                count,
                 live,
                 &p.shadow_o,
                 &p.shadow_d,
@@ -285,7 +327,7 @@ impl<'a> Wavefront<'a> {
                 &self.specs.shadow,
                 n,
                 f,
-                &p.count,
+                count,
                 live,
                 &p.shadow_o,
                 &p.shadow_d,
@@ -302,6 +344,7 @@ impl<'a> Wavefront<'a> {
     fn compact(
         &self,
         b: &mut LabelledBatch<'_>,
+        count: &GpuBuffer<u32>,
         live: &GpuBuffer<u32>,
         out: &GpuBuffer<u32>,
     ) -> Result<(), RenderError> {
@@ -310,8 +353,8 @@ impl<'a> Wavefront<'a> {
             compact::record(
                 b,
                 &self.specs.compact,
-                self.frame.slots,
-                &p.count,
+                self.listed,
+                count,
                 &p.flags,
                 &p.block_sums,
                 &p.total,

@@ -18,7 +18,7 @@ use cohort_kernels::sampling::{
 use cohort_kernels::shading::group_draws;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
-use cohort_kernels::{queues, reorder};
+use cohort_kernels::{queues, reorder, retire};
 
 use crate::design::Choice;
 use crate::paths::SortState;
@@ -63,6 +63,8 @@ pub(crate) struct Specs {
     pub(crate) shadow: cohort::Spec,
     pub(crate) shadow8: cohort::Spec,
     pub(crate) compact: compact::Specs,
+    /// `cohort_kernels::retire::mark_live` (the partition is `compact`'s).
+    pub(crate) live: cohort::Spec,
     pub(crate) reorder: reorder::Specs,
     pub(crate) queues: queues::Specs,
 }
@@ -123,6 +125,7 @@ impl Specs {
             shadow: trace_shadow::spec(d, None),
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
+            live: retire::spec(d),
             reorder: reorder::specs(d),
             queues: queues::specs(d),
         }
@@ -292,6 +295,11 @@ impl TypedOp for Compile<'_> {
         }
         if compact {
             builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
+        }
+        if o.retires() {
+            builds.push(Box::new(|| {
+                Ok(retire::artifacts(&specs.live, &specs.compact)?)
+            }));
         }
         if reorder {
             builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));

@@ -162,6 +162,14 @@ impl RenderOptions {
             && !self.coherent_light
     }
 
+    /// Whether the renderer retires finished slots from the live list
+    /// (`cohort_kernels::retire`): where no group shares a draw, so that the image does
+    /// not depend on which invocation takes a slot, and without compaction, whose lists
+    /// keep every slot.
+    pub(crate) fn retires(&self) -> bool {
+        !self.compact && self.per_path_sampling()
+    }
+
     /// The paths of every pixel this run renders: (first path index, how many; 0 for a
     /// time budget, which never stops a pixel).
     pub(crate) fn path_range(&self) -> (u32, u32) {

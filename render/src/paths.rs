@@ -33,7 +33,9 @@ pub(crate) struct Paths {
     pub(crate) sort: Option<SortState>,
     /// Material queues' buffers, allocated by the first run that shades over queues.
     pub(crate) queues: Option<QueueState>,
-    pub(crate) count: GpuBuffer<u32>,
+    /// The number of entries of each `idrays` list: the slots, until finished slots are
+    /// retired from a list (`cohort_kernels::retire`).
+    pub(crate) counts: [GpuBuffer<u32>; 2],
     pub(crate) block_sums: GpuBuffer<u32>,
     pub(crate) total: GpuBuffer<u32>,
     /// [completed paths, slots done]
@@ -70,7 +72,7 @@ impl Paths {
             flags: device.alloc(n)?,
             sort: None,
             queues: None,
-            count: device.upload(&[n as u32])?,
+            counts: [device.upload(&[n as u32])?, device.upload(&[n as u32])?],
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
             counters: device.alloc(2)?,

@@ -60,6 +60,9 @@ struct Run {
     cur: usize,
     /// Slots not done at the last read-back.
     live: u64,
+    /// At least the entries of list `cur`: the slots, or the slots not done when the
+    /// finished ones were last retired (`cohort_kernels::retire`).
+    listed: u32,
     /// GPU seconds of one iteration in the last submission: sizes the next one.
     per_iteration: Option<f64>,
     /// The design of the run's batches, a trial until both are measured.
@@ -366,6 +369,10 @@ impl<'d> Renderer<'d> {
         // its paths budget start done (`init_paths`), and count as done slots.
         let idle = crate::wavefront::idle_slots(&self.frame);
         d.write(&p.counters, 0, &[0, idle])?;
+        // Retiring (below) shortened a list of an earlier run.
+        for count in &p.counts {
+            d.write(count, 0, &[n])?;
+        }
         let stats = RenderStats {
             pixels: (n / self.frame.copies) as u64,
             slots: n as u64,
@@ -376,6 +383,7 @@ impl<'d> Renderer<'d> {
             stats,
             cur: 0,
             live: (n - idle) as u64,
+            listed: n,
             per_iteration: None,
             design: self.design.clone(),
         });
@@ -442,6 +450,9 @@ impl<'d> Renderer<'d> {
         const IN_FLIGHT: usize = 2;
         // Fewest iterations in a batch near the end of a paths budget.
         const TAIL_BATCH: f64 = 8.0;
+        // Lists this short are not worth a retirement's four dispatches.
+        const RETIRE_FROM: u32 = 256;
+        let retires = self.opts.retires();
         let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
             // Submit while fewer than IN_FLIGHT batches run and what is known (finished
@@ -502,7 +513,7 @@ impl<'d> Renderer<'d> {
                 let mut b = LabelledBatch::new(d.batch());
                 for k in 0..batch_iterations {
                     self.frame.iteration = run.stats.iterations + queued + k;
-                    let wavefront = Wavefront {
+                    let mut wavefront = Wavefront {
                         specs: &specs,
                         frame: &self.frame,
                         scene: &self.scene,
@@ -510,7 +521,16 @@ impl<'d> Renderer<'d> {
                         compaction: self.opts.compact,
                         reorder_every: self.opts.reorder,
                         queues: queued_batch,
+                        listed: run.listed,
                     };
+                    // Once at most half the listed slots are live, list only those: the
+                    // slots finished since the last read-back stay listed (and skipped)
+                    // until the next retirement, so `live` bounds the new list.
+                    if retires && run.live * 2 <= run.listed as u64 && run.listed > RETIRE_FROM {
+                        run.cur = wavefront.retire(&mut b, run.cur)?;
+                        run.listed = run.live as u32;
+                        wavefront.listed = run.listed;
+                    }
                     run.cur = wavefront.record_iteration::<S, E, I>(&mut b, run.cur)?;
                 }
                 let LabelledBatch { mut batch, stages } = b;

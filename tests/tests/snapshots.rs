@@ -90,6 +90,7 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::path_end::{EachPath, WholeGroup};
     use cohort_kernels::queues::{queue_count, queue_offsets, queue_scatter};
     use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
+    use cohort_kernels::retire::mark_live;
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
     use cohort_kernels::shading::{kind_bit, queue_set, SHADES_ALL};
     use cohort_kernels::traverse::{trace_shadow, traverse};
@@ -160,6 +161,13 @@ fn renderer_variants() -> Vec<variants::Variant> {
             &compact_scatter::INFO,
             Group::Thread,
             compact_scatter::build,
+        ),
+        // Retiring finished slots from the live list.
+        variant(
+            "mark_live",
+            &mark_live::INFO,
+            Group::Thread,
+            mark_live::build,
         ),
         // Ray reordering (`cohort render --reorder K`).
         variant(
