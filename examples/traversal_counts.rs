@@ -5,12 +5,18 @@
 //! primary rays (1024x1024, pixels in Morton order) and 2^20 diffuse rays from their hits
 //! (`common::diffuse_rays`), closest and any hit.
 //!
-//! The counts hold for any ray order. The times do not carry over to the renderer: these
-//! rays come in Morton order, so consecutive rays take the same branches, where the
-//! renderer's bounces do not (BENCHMARKS.md, "where the CPU traversal's time goes": a
-//! change that saved 18 % here saved nothing there). Compare builds on `cohort render`.
+//! The counts hold for any ray order. The times of rays in Morton order do not carry over
+//! to the renderer: consecutive rays take the same branches, where the renderer's bounces
+//! do not (BENCHMARKS.md, "where the CPU traversal's time goes": a change that saved 18 %
+//! here saved nothing there). So each set is timed again shuffled (a fixed permutation),
+//! which is the renderer's order after the first bounce. Compare builds on `cohort render`.
 //!
-//! `cargo run --release -p cohort-render --example traversal_counts -- SCENE.xml`
+//! With `--dump DIR` the four ray sets (primary and diffuse, each in Morton order and
+//! shuffled) are written to DIR as `NAME.o.f32` and `NAME.d.f32` (origins and directions,
+//! four little-endian f32 per ray, w unused), so that another renderer can trace the same
+//! rays: `scripts/traversal_vs_embree.py` times Mitsuba's (Embree's) traversal on them.
+//!
+//! `cargo run --release -p cohort-render --example traversal_counts -- SCENE.xml [--dump DIR]`
 
 mod common;
 
@@ -34,6 +40,8 @@ struct Counts {
     pops: u64,
     /// Pops of a node whose box's entry distance exceeds the closest hit found by then.
     skippable: u64,
+    /// Rays that hit nothing (to compare with another renderer on the same rays).
+    misses: u64,
 }
 
 /// Entry distance of the ray into child slot `s`'s box (as `traverse::slab`, unclipped).
@@ -50,6 +58,7 @@ fn count(org: Vec3, dir: Vec3, nodes: &[WideNode], tris: &[Triangle], c: &mut Co
     c.rays += 1;
     // `trace8` stops such a ray before its first node.
     if dir == Vec3::ZERO || dir.is_nan() {
+        c.misses += 1;
         return;
     }
     let inv = dir.recip();
@@ -104,6 +113,7 @@ fn count(org: Vec3, dir: Vec3, nodes: &[WideNode], tris: &[Triangle], c: &mut Co
             break;
         }
     }
+    c.misses += u64::from(best.w.to_bits() == MISS);
 }
 
 /// Nanoseconds per ray of `trace8::<Q>` over the rays, on this thread (best of three).
@@ -129,10 +139,44 @@ fn time<Q: HitQuery>(
     best
 }
 
+/// The rays in a fixed pseudo-random order (Fisher-Yates over an xorshift sequence).
+fn shuffled(o: &[Vec4], d: &[Vec4]) -> (Vec<Vec4>, Vec<Vec4>) {
+    let mut idx: Vec<usize> = (0..o.len()).collect();
+    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+    for i in (1..idx.len()).rev() {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        idx.swap(i, (seed % (i as u64 + 1)) as usize);
+    }
+    (
+        idx.iter().map(|&i| o[i]).collect(),
+        idx.iter().map(|&i| d[i]).collect(),
+    )
+}
+
+/// Writes `v` to `path` as little-endian f32, four per ray.
+fn dump(path: &std::path::Path, v: &[Vec4]) {
+    let bytes: Vec<u8> = v
+        .iter()
+        .flat_map(|x| x.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    if let Err(e) = std::fs::write(path, bytes) {
+        eprintln!("{}: {e}", path.display());
+        std::process::exit(1);
+    }
+}
+
 fn main() {
-    let Some(path) = std::env::args().nth(1) else {
-        eprintln!("usage: traversal_counts SCENE.xml");
-        std::process::exit(2);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (path, dump_dir) = match args.as_slice() {
+        [p] => (p.clone(), None),
+        [p, flag, dir] if flag == "--dump" => (p.clone(), Some(std::path::PathBuf::from(dir))),
+        _ => {
+            eprintln!("usage: traversal_counts SCENE.xml [--dump DIR]");
+            std::process::exit(2);
+        }
     };
     let scene = match cohort_scenes::mitsuba::load_mitsuba(&path) {
         Ok(l) => l.scene,
@@ -171,15 +215,35 @@ fn main() {
         })
         .collect();
     let (o2, d2, _) = diffuse_rays(&o, &d, &hits, tris);
-    println!("rays     nodes leaves triangles  pops skippable  closest ns  any ns");
-    for (name, o, d) in [("primary", &o, &d), ("diffuse", &o2, &d2)] {
+    let (o3, d3) = shuffled(&o, &d);
+    let (o4, d4) = shuffled(&o2, &d2);
+    let sets = [
+        ("primary", &o, &d),
+        ("diffuse", &o2, &d2),
+        ("primary_shuffled", &o3, &d3),
+        ("diffuse_shuffled", &o4, &d4),
+    ];
+    if let Some(dir) = &dump_dir {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            eprintln!("{}: {e}", dir.display());
+            std::process::exit(1);
+        }
+        for (name, o, d) in sets {
+            dump(&dir.join(format!("{name}.o.f32")), o);
+            dump(&dir.join(format!("{name}.d.f32")), d);
+        }
+    }
+    println!(
+        "rays              nodes leaves triangles  pops skippable  closest ns  any ns   misses"
+    );
+    for (name, o, d) in sets {
         let mut c = Counts::default();
         for (o, d) in o.iter().zip(d.iter()) {
             count(o.truncate(), d.truncate(), &wide.nodes, tris, &mut c);
         }
         let per = |x: u64| x as f64 / c.rays as f64;
         println!(
-            "{name:8} {:5.2} {:6.2} {:9.2} {:5.2} {:9.2} {:11.1} {:7.1}",
+            "{name:17} {:5.2} {:6.2} {:9.2} {:5.2} {:9.2} {:11.1} {:7.1} {:8}",
             per(c.nodes),
             per(c.leaves),
             per(c.triangles),
@@ -187,6 +251,7 @@ fn main() {
             per(c.skippable),
             time::<Closest>(o, d, &f, &wide.nodes, tris),
             time::<AnyHit>(o, d, &f, &wide.nodes, tris),
+            c.misses,
         );
     }
 }
