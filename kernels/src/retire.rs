@@ -4,8 +4,8 @@
 //! 240, and more than half of all slot-iterations after the first were of done slots.
 //! Every stage still ran over the whole list, and a done slot is not free where lanes run
 //! together: a GPU warp or a CPU vector block with one live lane costs as much as a full
-//! one. So the renderer, once the slots not done are at most half of those listed, lists
-//! only them: [`mark_live`] flags each listed slot whose path is not done, and the
+//! one. So the renderer, once the slots not done are at most three quarters of those
+//! listed, lists only them: [`mark_live`] flags each listed slot whose path is not done, and the
 //! stable partition of [`crate::compact`] puts them first, in their order, and writes
 //! their number as the new list's count. Done slots never come back (`DONE` is final
 //! for a run), so the list stays a superset of the live slots; the stages already skip a

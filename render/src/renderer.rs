@@ -523,10 +523,14 @@ impl<'d> Renderer<'d> {
                         queues: queued_batch,
                         listed: run.listed,
                     };
-                    // Once at most half the listed slots are live, list only those: the
-                    // slots finished since the last read-back stay listed (and skipped)
-                    // until the next retirement, so `live` bounds the new list.
-                    if retires && run.live * 2 <= run.listed as u64 && run.listed > RETIRE_FROM {
+                    // Once at most three quarters of the listed slots are live, list only
+                    // those: the slots finished since the last read-back stay listed (and
+                    // skipped) until the next retirement, so `live` bounds the new list.
+                    // On an H200, half measured about 1 % slower than three quarters and
+                    // nine tenths 0.5 % faster; on the CPU backend nine tenths spends
+                    // 10-15 ms more of a 256x256 render in the partition (BENCHMARKS.md).
+                    if retires && run.live * 4 <= run.listed as u64 * 3 && run.listed > RETIRE_FROM
+                    {
                         run.cur = wavefront.retire(&mut b, run.cur)?;
                         run.listed = run.live as u32;
                         wavefront.listed = run.listed;
