@@ -67,6 +67,43 @@ fn alloc_is_zeroed_and_write_lands_at_offset() {
     }
 }
 
+/// More upload data than the Vulkan backend lets wait in staging memory for its copies
+/// (256 MiB; beyond it, `create_buffer` submits at once): the uploads before that
+/// submission, the one that triggers it, the zeroed allocations queued among them and the
+/// upload after it all read back as written, on every backend.
+#[test]
+fn uploads_beyond_the_staging_limit_all_land() {
+    // Five uploads of 52 MiB pass the limit; the sixth waits for the reads.
+    const LEN: u32 = 13 << 20;
+    // One value per upload (a fill and a compare that stay fast in a debug build), its
+    // ends marked so that a copy at an offset or of another length shows.
+    let data = |k: u32| -> Vec<u32> {
+        let mut v = vec![0x5EED_0000 | k; LEN as usize];
+        v[0] = k;
+        v[LEN as usize - 1] = !k;
+        v
+    };
+    for dev in devices() {
+        let mut uploaded = Vec::new();
+        let mut zeroed = Vec::new();
+        for k in 0..6 {
+            uploaded.push(dev.upload(&data(k)).unwrap());
+            let z: GpuBuffer<u32> = dev.alloc(1000).unwrap();
+            zeroed.push(z);
+        }
+        for (k, buf) in uploaded.iter().enumerate() {
+            assert!(
+                dev.read(buf).unwrap() == data(k as u32),
+                "{dev:?}: upload {k} did not land"
+            );
+        }
+        for z in &zeroed {
+            assert!(dev.read(z).unwrap().iter().all(|&v| v == 0), "{dev:?}");
+        }
+        assert_validation_clean(&dev);
+    }
+}
+
 /// A `Device` is shared by threads (the renderer uploads a scene's arrays and allocates its
 /// path state beside creating pipelines): uploads, allocations, reads and pipeline creation
 /// from several threads at once must each do what they do alone.
