@@ -1,7 +1,7 @@
 //! Retiring finished slots from the live list. With a paths budget each slot renders its
 //! pixel's paths one after another, and slots finish at different iterations: on
 //! stanford-like at 256x256 and 32 paths, half the slots were done by iteration 110 of
-//! 240, and more than half of all slot-iterations after the first were of done slots.
+//! 240, and more than half of all slot-iterations were of done slots.
 //! Every stage still ran over the whole list, and a done slot is not free where lanes run
 //! together: a GPU warp or a CPU vector block with one live lane costs as much as a full
 //! one. So the renderer, once the slots not done are at most three quarters of those
