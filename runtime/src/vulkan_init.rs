@@ -34,6 +34,7 @@ pub(crate) struct Shared {
 
 impl Drop for Shared {
     fn drop(&mut self) {
+        let _lifecycle = lifecycle();
         unsafe {
             let _ = self.device.device_wait_idle();
             // The allocator frees its memory blocks through the device, so it goes first.
@@ -59,6 +60,17 @@ pub(crate) struct SubgroupControl {
 
 pub(crate) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Held while this process creates or destroys a Vulkan instance or device, through either
+/// backend. NVIDIA's driver (580) deadlocked when devices came and went on several threads
+/// at once: `vkDestroyDevice` joined a driver thread whose exit never finished, and threads
+/// that had used the driver waited on its lock as they exited. The runtime's dispatch tests
+/// with parallel test threads hung in 11 of 17 runs on an H200, and in none of 17 with
+/// this lock (BENCHMARKS.md, 2026-11-30).
+pub(crate) fn lifecycle() -> std::sync::MutexGuard<'static, ()> {
+    static LIFECYCLE: Mutex<()> = Mutex::new(());
+    lock(&LIFECYCLE)
 }
 
 fn no_adapter(detail: impl Into<String>) -> RuntimeError {
@@ -285,6 +297,7 @@ fn is_software(instance: &ash::Instance, c: &Candidate) -> bool {
 }
 
 fn open_with(which: Option<usize>, skip_software: bool) -> Result<Found> {
+    let _lifecycle = lifecycle();
     let (entry, instance_api) = load()?;
 
     let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();

@@ -9,6 +9,7 @@
 //! which collects it (wgpu's default handler would panic).
 
 use std::borrow::Cow;
+use std::mem::ManuallyDrop;
 use std::num::NonZeroU64;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
@@ -51,8 +52,9 @@ pub(crate) struct WgpuDevice {
     pub(crate) info: DeviceInfo,
     pub(crate) limits: Limits,
     pub(crate) pipelines: PipelineCache<Pipeline>,
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    /// Dropped under `vulkan_init::lifecycle`, as the Vulkan backend's devices are.
+    device: ManuallyDrop<wgpu::Device>,
+    queue: ManuallyDrop<wgpu::Queue>,
     max_buffer_size: u64,
     timestamp_period_ns: f64,
     messages: Arc<Mutex<Vec<String>>>,
@@ -100,6 +102,19 @@ fn instance() -> &'static wgpu::Instance {
     })
 }
 
+impl Drop for WgpuDevice {
+    fn drop(&mut self) {
+        let _lifecycle = crate::vulkan_init::lifecycle();
+        // The pipelines hold the device too: all go while the lock is held.
+        drop(self.pipelines.drain());
+        // SAFETY: dropped once, here; no method runs after `drop`.
+        unsafe {
+            ManuallyDrop::drop(&mut self.queue);
+            ManuallyDrop::drop(&mut self.device);
+        }
+    }
+}
+
 impl WgpuDevice {
     /// The best adapter, or adapter number `which` in wgpu's order.
     pub(crate) fn new(which: Option<usize>) -> Result<Self> {
@@ -126,6 +141,7 @@ impl WgpuDevice {
             })?;
         let adapter_info = adapter.get_info();
         let features = adapter.features() & WANTED_FEATURES;
+        let lifecycle = crate::vulkan_init::lifecycle();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("cohort"),
             required_features: features,
@@ -137,6 +153,7 @@ impl WgpuDevice {
             backend: BACKEND,
             detail: e.to_string(),
         })?;
+        drop(lifecycle);
 
         let messages = Arc::new(Mutex::new(Vec::new()));
         let sink = messages.clone();
@@ -207,8 +224,8 @@ impl WgpuDevice {
             pipelines: PipelineCache::new(Code::Wgsl),
             max_buffer_size: l.max_buffer_size,
             timestamp_period_ns: queue.get_timestamp_period() as f64,
-            device,
-            queue,
+            device: ManuallyDrop::new(device),
+            queue: ManuallyDrop::new(queue),
             messages,
             scopes: Mutex::new(()),
         })
