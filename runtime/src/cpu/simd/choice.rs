@@ -1,10 +1,18 @@
 //! Which form runs a kernel that has both. The vector form wins on arithmetic-heavy kernels
 //! and can lose on divergent ones (a BVH traversal's lanes walk different nodes and gather
 //! everything they load), and which one wins depends on the scene as much as on the kernel.
-//! So by default the backend measures: each form runs one of a kernel's first dispatches,
-//! then the one with less time per invocation (a running average) runs the kernel, and one
-//! dispatch in 16 (fewer where the other is much slower) runs the other to keep its average
-//! current. Both forms compute the same bits, so the choice changes only speed.
+//! So by default the backend measures: the forms alternate over a kernel's first
+//! dispatches, then the faster one runs the kernel, and one dispatch in 16 (fewer where the
+//! other is much slower) runs the other to keep the comparison current. Both forms compute
+//! the same bits, so the choice changes only speed.
+//!
+//! A dispatch's time per invocation drifts over a render (its first bounces are coherent,
+//! later ones are not; long paths are left at the end), so two forms timed at different
+//! moments do not compare: a form last timed early looks cheaper than it is. Each
+//! comparison is therefore a sandwich, the other form's dispatch between two of one form,
+//! against the geometric mean of its neighbours, which cancels a steady drift. (With a
+//! running average of each form's own timings instead, the traversal of stanford-like ran
+//! its 1.2-1.4x slower vector form in about half of its dispatches in two renders of three.)
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -45,13 +53,22 @@ const EXPLORE_COST: f64 = 0.02;
 /// The rarest exploring dispatch: one in this many.
 const EXPLORE_MAX: u64 = 256;
 
-/// Weight of a new timing in a form's running estimate.
+/// Weight of a new sandwich in the running estimate of the forms' ratio.
 const WEIGHT: f64 = 0.25;
+
+/// The forms alternate over a kernel's first this many dispatches: each form's first
+/// dispatch warms its code and data and is not compared, the rest give three sandwiches.
+const ALTERNATE: u64 = 7;
 
 #[derive(Default, Clone, Copy)]
 struct Trial {
-    /// Running estimate of nanoseconds per invocation, per form (0: vector, 1: host).
-    estimate: [Option<f64>; 2],
+    /// Running estimate of ln(vector time / host time) per invocation, from sandwiches.
+    log_ratio: Option<f64>,
+    /// The last two timed dispatches, newest last: (vector form, ns per invocation,
+    /// compared: not the form's first dispatch).
+    last: [Option<(bool, f64, bool)>; 2],
+    /// Dispatches timed, per form (0: vector, 1: host).
+    timed: [u64; 2],
     dispatches: u64,
     /// The form last reported faster (for the log).
     faster: Option<bool>,
@@ -59,19 +76,16 @@ struct Trial {
 
 impl Trial {
     fn vector_faster(&self) -> Option<bool> {
-        match self.estimate {
-            [Some(v), Some(h)] => Some(v <= h),
-            _ => None,
-        }
+        self.log_ratio.map(|r| r <= 0.0)
     }
 
     /// One dispatch in this many runs the slower form: the running cost of doing so,
     /// (slower / faster - 1) / interval, stays within `EXPLORE_COST`.
     fn explore_every(&self) -> u64 {
-        let [Some(v), Some(h)] = self.estimate else {
+        let Some(r) = self.log_ratio else {
             return EXPLORE_EVERY;
         };
-        let ratio = v.max(h) / v.min(h).max(f64::MIN_POSITIVE);
+        let ratio = r.abs().exp();
         let every = ((ratio - 1.0) / EXPLORE_COST).ceil();
         if every.is_finite() {
             (every as u64).clamp(EXPLORE_EVERY, EXPLORE_MAX)
@@ -166,14 +180,14 @@ impl Chooser {
         let Some(tr) = t.get(kernel) else {
             return true;
         };
-        match (tr.estimate, tr.vector_faster()) {
-            ([None, _], _) => true,
-            ([_, None], _) => false,
-            (_, Some(v)) => {
+        match tr.vector_faster() {
+            // Alternating, from the vector form: a sandwich completes on every dispatch.
+            Some(_) if tr.dispatches < ALTERNATE => tr.dispatches % 2 == 0,
+            None => tr.dispatches % 2 == 0,
+            Some(v) => {
                 let every = tr.explore_every();
                 v != (tr.dispatches % every == every - 1)
             }
-            (_, None) => true,
         }
     }
 
@@ -181,20 +195,33 @@ impl Chooser {
     pub fn record(&self, kernel: &str, vector: bool, ns: u64, invocations: u64) {
         let mut t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
         let tr = t.entry(kernel.to_string()).or_default();
-        let x = ns as f64 / invocations.max(1) as f64;
-        let e = &mut tr.estimate[usize::from(!vector)];
-        *e = Some(e.map_or(x, |old| (1.0 - WEIGHT) * old + WEIGHT * x));
+        let x = (ns.max(1) as f64 / invocations.max(1) as f64).ln();
+        let form = usize::from(!vector);
+        let compared = tr.timed[form] > 0;
+        tr.timed[form] += 1;
+        // A sandwich: the other form's dispatch between the previous one of this form and
+        // this one, none of them a form's first.
+        if let [Some((v0, x0, c0)), Some((v1, x1, c1))] = tr.last {
+            if v0 == vector && v1 != vector && c0 && c1 && compared {
+                // ln(other / this form), turned into ln(vector / host).
+                let other = x1 - 0.5 * (x0 + x);
+                let sample = if vector { -other } else { other };
+                tr.log_ratio = Some(
+                    tr.log_ratio
+                        .map_or(sample, |old| (1.0 - WEIGHT) * old + WEIGHT * sample),
+                );
+            }
+        }
+        tr.last = [tr.last[1], Some((vector, x, compared))];
         tr.dispatches += 1;
         let faster = tr.vector_faster();
         if faster.is_some() && faster != tr.faster {
             tr.faster = faster;
             if super::log() {
-                let [Some(v), Some(h)] = tr.estimate else {
-                    return;
-                };
+                let r = tr.log_ratio.unwrap_or(0.0).exp();
                 eprintln!(
-                    "cohort: `{kernel}`: vector form {v:.1} ns per invocation, host form {h:.1}: runs its {} form",
-                    if v <= h { "vector" } else { "host" }
+                    "cohort: `{kernel}`: vector form {r:.3}x the host form's time: runs its {} form",
+                    if r <= 1.0 { "vector" } else { "host" }
                 );
             }
         }
@@ -207,7 +234,7 @@ mod tests {
 
     fn trial(vector_ns: f64, host_ns: f64) -> Trial {
         Trial {
-            estimate: [Some(vector_ns), Some(host_ns)],
+            log_ratio: Some((vector_ns / host_ns).ln()),
             ..Default::default()
         }
     }
@@ -224,14 +251,31 @@ mod tests {
         assert_eq!(trial(0.0, 10.0).explore_every(), EXPLORE_MAX);
     }
 
+    /// Runs `n` dispatches of kernel "k" where the dispatch numbered `d` takes
+    /// `ns(d, vector)`; returns how many ran the vector form after the alternation.
+    fn vector_runs(c: &Chooser, n: u64, ns: impl Fn(u64, bool) -> f64) -> u64 {
+        let mut vector = 0;
+        for d in 0..n {
+            let v = c.vector_next("k");
+            if d >= ALTERNATE {
+                vector += u64::from(v);
+            }
+            c.record("k", v, ns(d, v) as u64, 1);
+        }
+        vector
+    }
+
     #[test]
     fn the_faster_form_runs_and_the_slower_one_is_explored() {
         let c = Chooser::default();
-        // First dispatch: vector (no estimate), second: host (no host estimate).
-        assert!(c.vector_next("k"));
-        c.record("k", true, 100, 1);
-        assert!(!c.vector_next("k"));
-        c.record("k", false, 240, 1);
+        // The first seven dispatches alternate, from the vector form.
+        let mut order = Vec::new();
+        for _ in 0..ALTERNATE {
+            let v = c.vector_next("k");
+            order.push(v);
+            c.record("k", v, if v { 100 } else { 240 }, 1);
+        }
+        assert_eq!(order, [true, false, true, false, true, false, true]);
         // Vector is 2.4x faster: it runs, except once in 70 dispatches.
         let mut host_runs = 0;
         for _ in 0..700 {
@@ -240,5 +284,30 @@ mod tests {
             c.record("k", v, if v { 100 } else { 240 }, 1);
         }
         assert_eq!(host_runs, 10);
+    }
+
+    #[test]
+    fn a_drifting_cost_does_not_mislead_the_choice() {
+        // Each dispatch costs more than the one before (a render's bounces get less
+        // coherent), the first one much less; the vector form takes 1.3x the host's time
+        // at any moment, then the other way round. The faster form runs but for its
+        // explorations (one in 16).
+        let drift = |d: u64| {
+            if d == 0 {
+                40.0
+            } else {
+                1000.0 * (1.0 + d as f64 / 20.0)
+            }
+        };
+        let n = 400;
+        let c = Chooser::default();
+        let v = vector_runs(&c, n, |d, v| drift(d) * if v { 1.3 } else { 1.0 });
+        assert!(v <= (n - ALTERNATE) / 16 + 1, "vector ran {v} times");
+        let c = Chooser::default();
+        let v = vector_runs(&c, n, |d, v| drift(d) * if v { 1.0 } else { 1.3 });
+        assert!(
+            v >= (n - ALTERNATE) - (n - ALTERNATE) / 16 - 1,
+            "vector ran {v} times"
+        );
     }
 }
