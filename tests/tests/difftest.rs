@@ -642,7 +642,10 @@ fn vector_and_matrix_math() {
 
 /// `#[specialize]` parameters: every combination of the constants, on every backend and on
 /// the host, over edge values (NaN, infinities, -0, the extremes, an empty buffer). The
-/// operations are exact (doubling, sqrt, negation, min/max), so results match bit for bit.
+/// operations are exact on the host and the CPU backend (doubling, sqrt, negation,
+/// min/max), so those match bit for bit; a GPU's `sqrt` need not be correctly rounded
+/// (LANGUAGE.md: Vulkan allows about 3 ulp; NVIDIA's, through wgpu, is 1 ulp off for 7.5),
+/// so where the root is taken GPU results are within 3 ulp.
 #[test]
 fn specialize_constants_match_host() {
     use cohort_tests::kernels::specialize::*;
@@ -682,11 +685,13 @@ fn specialize_constants_match_host() {
                 });
                 let host: Vec<u32> = host.iter().map(|v| v.to_bits()).collect();
                 for (d, o) in devs.iter().zip(&outs) {
+                    let gpu = d.info().backend != cohort::runtime::BackendKind::Cpu;
+                    let bound = if gpu && mode & ROOT != 0 { 3 } else { 0 };
                     // NaN's payload and sign may differ through sqrt and negation on a GPU.
                     for (k, (a, b)) in o.iter().zip(&host).enumerate() {
                         let (fa, fb) = (f32::from_bits(*a), f32::from_bits(*b));
                         assert!(
-                            a == b || (fa.is_nan() && fb.is_nan()),
+                            a == b || (fa.is_nan() && fb.is_nan()) || ulps(fa, fb) <= bound,
                             "{:?}, mode {mode}, clamp {clamp}, element {k}: {fa} vs host {fb}",
                             d.info().backend
                         );
