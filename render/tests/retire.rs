@@ -31,7 +31,7 @@ fn a_render_that_retires_finished_slots_is_the_same_image() {
         ..Default::default()
     };
     let variants = [
-        RenderOptions { ..base.clone() },
+        base.clone(),
         RenderOptions {
             shading: Shading::Queues,
             ..base.clone()
