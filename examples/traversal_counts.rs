@@ -26,7 +26,7 @@ use cohort_kernels::traverse_wide::{
     hit4, permute8, pick, trace8, AnyHit, Closest, HitQuery, WideNode,
 };
 use cohort_scenes::GpuBvh8;
-use common::{diffuse_rays, primary_rays};
+use common::{diffuse_rays, load_or_exit, primary_rays, shuffled};
 use glam::{UVec3, Vec3, Vec4};
 use std::time::Instant;
 
@@ -139,22 +139,6 @@ fn time<Q: HitQuery>(
     best
 }
 
-/// The rays in a fixed pseudo-random order (Fisher-Yates over an xorshift sequence).
-fn shuffled(o: &[Vec4], d: &[Vec4]) -> (Vec<Vec4>, Vec<Vec4>) {
-    let mut idx: Vec<usize> = (0..o.len()).collect();
-    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-    for i in (1..idx.len()).rev() {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        idx.swap(i, (seed % (i as u64 + 1)) as usize);
-    }
-    (
-        idx.iter().map(|&i| o[i]).collect(),
-        idx.iter().map(|&i| d[i]).collect(),
-    )
-}
-
 /// Writes `v` to `path` as little-endian f32, four per ray.
 fn dump(path: &std::path::Path, v: &[Vec4]) {
     let bytes: Vec<u8> = v
@@ -178,13 +162,7 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let scene = match cohort_scenes::mitsuba::load_mitsuba(&path) {
-        Ok(l) => l.scene,
-        Err(e) => {
-            eprintln!("{path}: {e}");
-            std::process::exit(1);
-        }
-    };
+    let scene = load_or_exit(&path);
     let (bvh, wide) = GpuBvh8::build_scene(&scene).expect("bvh");
     let wide = wide.expect("the scene's tree has an 8-wide form");
     let tris: &[Triangle] = bytemuck::cast_slice(&bvh.triangles);

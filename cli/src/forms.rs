@@ -16,6 +16,7 @@ pub fn counts(devices: &[Device]) -> Vec<FormCount> {
                 a.host += c.host;
                 a.pending += c.pending;
                 a.host_only += c.host_only;
+                a.whole += c.whole;
             }
             None => all.push(c),
         }
@@ -38,6 +39,7 @@ pub fn line(counts: &[FormCount]) -> String {
                     let what = match form {
                         "pending" => "host while the vector form was not compiled yet",
                         "host_only" => "host (no vector form)",
+                        "whole" => "whole-dispatch",
                         other => other,
                     };
                     format!("{n} {what}")
@@ -75,6 +77,7 @@ mod tests {
             host,
             pending,
             host_only,
+            whole: 0,
         }
     }
 

@@ -797,7 +797,7 @@ fn the_wavefront_is_chosen_and_reported() {
                 .iter()
                 .find(|(k, _)| k.starts_with(stage))
                 .unwrap_or_else(|| panic!("no {stage} in {forms:?}"));
-            let total: u64 = ["vector", "host", "pending", "host_only"]
+            let total: u64 = ["vector", "host", "pending", "host_only", "whole"]
                 .iter()
                 .map(|f| c[f].as_u64().unwrap())
                 .sum();
@@ -846,4 +846,54 @@ fn cohort_cpu_simd_lanes_sets_the_vector_width() {
             "{value}: {err}"
         );
     }
+}
+
+/// The CPU backend's whole-dispatch traversals (`cohort_kernels::traverse_stream`, on CPUs
+/// with AVX-512) render the image that the kernels' host forms render, bit for bit, and
+/// the `cpu forms` line says which ran.
+#[test]
+fn stream_traversals_render_the_host_forms_image() {
+    let dir = tempdir();
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../render/tests/scenes/stanford-like/scene.xml"
+    );
+    let render = |name: &str, forms: Option<&str>| {
+        let mut c = cohort();
+        c.current_dir(&dir)
+            .args([
+                "render",
+                "--scene",
+                scene,
+                "--backend",
+                "cpu",
+                "--integrator",
+                "nee",
+            ])
+            .args(["--width", "48", "--height", "48", "--paths", "4"])
+            .args(["--out", &format!("{name}.exr")]);
+        if let Some(f) = forms {
+            c.env("COHORT_CPU_SIMD", f);
+        }
+        let out = c.output().unwrap();
+        assert_ok(&out);
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        (
+            std::fs::read(dir.join(format!("{name}.png"))).unwrap(),
+            text,
+        )
+    };
+    let (host, host_text) = render("host", Some("host"));
+    let (stream, text) = render("stream", None);
+    assert!(!host_text.contains("whole-dispatch"), "{host_text}");
+    #[cfg(target_arch = "x86_64")]
+    let avx512 = std::arch::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let avx512 = false;
+    assert_eq!(
+        text.contains("traverse8") && text.contains("whole-dispatch"),
+        avx512,
+        "{text}"
+    );
+    assert!(host == stream, "the stream traversals changed the image");
 }

@@ -26,6 +26,8 @@ pub fn compile(built: &BuiltKernel, name: String) -> Result<KernelArtifact, Comp
 pub struct HostEntry {
     pub invoke: cohort_runtime::cpu::Invoke,
     pub workgroup_vars: fn() -> Vec<(usize, usize)>,
+    /// `#[kernel(cpu_dispatch = path)]`.
+    pub dispatch: Option<cohort_runtime::cpu::DispatchForm>,
 }
 
 /// [`compile`], with the host form the CPU backend runs.
@@ -38,6 +40,7 @@ pub fn compile_with_host(
     let host = host.map(|h| HostKernel {
         invoke: h.invoke,
         workgroup_vars: h.workgroup_vars,
+        dispatch: h.dispatch,
         group: match compiled.spec.group {
             Group::Thread => GroupLevel::Thread,
             Group::Warp => GroupLevel::Warp,

@@ -123,3 +123,31 @@ pub fn diffuse_rays(
     }
     (o2, d2, hit_count)
 }
+
+/// The rays in a fixed pseudo-random order (Fisher-Yates over an xorshift sequence): the
+/// renderer's order of rays after the first bounce, where neighbours are unrelated paths.
+pub fn shuffled(o: &[Vec4], d: &[Vec4]) -> (Vec<Vec4>, Vec<Vec4>) {
+    let mut idx: Vec<usize> = (0..o.len()).collect();
+    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+    for i in (1..idx.len()).rev() {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        idx.swap(i, (seed % (i as u64 + 1)) as usize);
+    }
+    (
+        idx.iter().map(|&i| o[i]).collect(),
+        idx.iter().map(|&i| d[i]).collect(),
+    )
+}
+
+/// The Mitsuba scene at `path`, or the process ends naming the file and the error.
+pub fn load_or_exit(path: &str) -> Scene {
+    match cohort_scenes::mitsuba::load_mitsuba(path) {
+        Ok(l) => l.scene,
+        Err(e) => {
+            eprintln!("{path}: {e}");
+            std::process::exit(1);
+        }
+    }
+}

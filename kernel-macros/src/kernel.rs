@@ -16,6 +16,8 @@ pub struct KernelAttr {
     workgroup: u32,
     group: TokenStream,
     finite_loops: bool,
+    /// `cpu_dispatch = path`: a function that runs a whole dispatch on the CPU backend.
+    cpu_dispatch: Option<syn::Path>,
 }
 
 impl Parse for KernelAttr {
@@ -24,6 +26,7 @@ impl Parse for KernelAttr {
             workgroup: 64,
             group: quote!(::cohort::Group::Thread),
             finite_loops: false,
+            cpu_dispatch: None,
         };
         let mut group_block: Option<u32> = None;
         while !input.is_empty() {
@@ -73,10 +76,13 @@ impl Parse for KernelAttr {
                     }
                     attr.finite_loops = true;
                 }
+                "cpu_dispatch" => {
+                    attr.cpu_dispatch = Some(input.parse()?);
+                }
                 other => {
                     return Err(syn::Error::new(
                         key.span(),
-                        format!("unknown kernel option `{other}`; expected `workgroup = N`, `group = Thread | Warp | Block(n) | Grid` or `loops = finite`"),
+                        format!("unknown kernel option `{other}`; expected `workgroup = N`, `group = Thread | Warp | Block(n) | Grid`, `loops = finite` or `cpu_dispatch = path`"),
                     ))
                 }
             }
@@ -427,6 +433,10 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
     let wg = attr.workgroup;
     let group = attr.group;
     let finite_loops = attr.finite_loops;
+    let cpu_dispatch = match &attr.cpu_dispatch {
+        Some(p) => quote!(::core::option::Option::Some(#p as ::cohort::runtime::cpu::DispatchForm)),
+        None => quote!(::core::option::Option::None),
+    };
     let generics = &f.sig.generics;
     let type_params: Vec<_> = generics.type_params().map(|t| t.ident.clone()).collect();
     let (impl_g, _, where_clause) = generics.split_for_impl();
@@ -518,6 +528,7 @@ pub fn expand(attr: KernelAttr, mut f: ItemFn) -> syn::Result<TokenStream> {
                     ::cohort::emit::HostEntry {
                         invoke: __cpu_invoke #turbofish,
                         workgroup_vars: __cpu_workgroup_vars #turbofish,
+                        dispatch: #cpu_dispatch,
                     },
                 )
             }

@@ -41,5 +41,6 @@ pub mod shadow;
 pub mod texture;
 pub mod traverse;
 pub mod traverse_cw;
+pub mod traverse_stream;
 pub mod traverse_wide;
 pub mod validate;

@@ -218,8 +218,9 @@ pub fn trace_ray8(
 }
 
 /// Closest hit of every live ray through the 8-wide BVH: a drop-in for
-/// [`crate::traverse::traverse`] with `nodes` from `cohort_scenes::GpuBvh8`.
-#[kernel(workgroup = 64, loops = finite)]
+/// [`crate::traverse::traverse`] with `nodes` from `cohort_scenes::GpuBvh8`. On the CPU
+/// backend a dispatch traces its rays as one stream ([`crate::traverse_stream`]).
+#[kernel(workgroup = 64, loops = finite, cpu_dispatch = crate::traverse_stream::traverse8_whole)]
 #[allow(clippy::too_many_arguments)]
 pub fn traverse8(
     #[builtin(global_index)] gi: u32,
@@ -241,8 +242,9 @@ pub fn traverse8(
 
 /// The shadow pass of next-event estimation over the 8-wide BVH: for every live slot,
 /// trace its light sample's shadow ray (any hit, early exit) and finish the slot
-/// (`crate::shadow::finish_slot`).
-#[kernel(workgroup = 64, loops = finite)]
+/// (`crate::shadow::finish_slot`). On the CPU backend a dispatch traces its shadow rays as
+/// one stream ([`crate::traverse_stream`]).
+#[kernel(workgroup = 64, loops = finite, cpu_dispatch = crate::traverse_stream::trace_shadow8_whole)]
 #[allow(clippy::too_many_arguments)]
 pub fn trace_shadow8(
     #[builtin(global_index)] gi: u32,

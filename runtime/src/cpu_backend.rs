@@ -248,6 +248,12 @@ impl CpuDevice {
             return Ok(());
         }
         let invocations = total * u64::from(cmd.workgroup_size);
+        if let Some(host) = cmd.host.filter(|h| h.dispatch.is_some()) {
+            if self.forms == cpu::simd::Forms::Measured && run_whole(cmd, host, invocations)? {
+                self.ran.add(&cmd.name, cpu::simd::Ran::Whole);
+                return Ok(());
+            }
+        }
         let ready = self.simd_form(&cmd.code, cmd.host.is_some());
         let simd = match ready {
             cpu::simd::Ready::Vector(k) => Some(k),
@@ -292,34 +298,56 @@ impl CpuDevice {
     }
 }
 
-/// A dispatch of a kernel's host form.
-fn run_host(cmd: &Cmd, host: HostKernel, groups: [u32; 3], total: u64) -> Result<()> {
-    let bufs: Vec<HostBuf> = cmd
-        .args
+/// The dispatch's buffers as the host forms see them.
+fn host_bufs(cmd: &Cmd) -> Vec<HostBuf> {
+    cmd.args
         .iter()
         .map(|arg| HostBuf {
             ptr: arg.buffer.ptr(),
             bytes: arg.size_bytes as usize,
         })
-        .collect();
+        .collect()
+}
+
+/// The error of a dispatch whose code panicked.
+fn panicked(cmd: &Cmd, payload: Box<dyn std::any::Any + Send>) -> RuntimeError {
+    let message = payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "a panic without a message".into());
+    RuntimeError::Dispatch {
+        kernel: cmd.name.clone(),
+        backend: BackendKind::Cpu,
+        detail: format!("an invocation panicked: {message}"),
+    }
+}
+
+/// A dispatch of a kernel's host form.
+fn run_host(cmd: &Cmd, host: HostKernel, groups: [u32; 3], total: u64) -> Result<()> {
+    let bufs = host_bufs(cmd);
     let launch = cpu::Launch::new(&host, &bufs, cmd.workgroup_size, groups);
-    let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| {
+    std::panic::catch_unwind(AssertUnwindSafe(|| {
         (0..total as u32)
             .into_par_iter()
             .for_each(|wg| SCRATCH.with(|s| cpu::run_workgroup(&launch, wg, &mut s.borrow_mut())))
-    }));
-    outcome.map_err(|payload| {
-        let message = payload
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "a panic without a message".into());
-        RuntimeError::Dispatch {
-            kernel: cmd.name.clone(),
-            backend: BackendKind::Cpu,
-            detail: format!("an invocation panicked: {message}"),
-        }
-    })
+    }))
+    .map_err(|payload| panicked(cmd, payload))
+}
+
+/// A dispatch of a kernel's whole-dispatch form: whether it ran (`cpu::DispatchForm`).
+fn run_whole(cmd: &Cmd, host: HostKernel, invocations: u64) -> Result<bool> {
+    let Some(whole) = host.dispatch else {
+        return Ok(false);
+    };
+    let bufs = host_bufs(cmd);
+    let args = cpu::LaneArgs {
+        bufs: &bufs,
+        workgroup: &[],
+        constants: &host.constants,
+    };
+    std::panic::catch_unwind(AssertUnwindSafe(|| whole(&args, invocations)))
+        .map_err(|payload| panicked(cmd, payload))
 }
 
 /// A dispatch of a kernel's vector form: workgroups spread over the cores as for host

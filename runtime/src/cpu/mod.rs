@@ -52,7 +52,19 @@ pub struct HostKernel {
     pub synchronises: bool,
     /// The values of the kernel's `#[specialize]` parameters (`Spec::constants`).
     pub constants: [u32; cohort_compiler::spec::MAX_CONSTANTS],
+    /// The kernel's whole-dispatch form (`#[kernel(cpu_dispatch = path)]`), if it has one.
+    pub dispatch: Option<DispatchForm>,
 }
+
+/// A kernel's whole-dispatch form: runs all `invocations` of one dispatch at once, with
+/// the same effect as running each of them (the buffers of [`LaneArgs`], no workgroup
+/// memory), and may spread the work over the cores itself. It returns `false`, having
+/// done nothing, where it cannot run (say, a CPU without the instructions it needs): the
+/// backend then runs the kernel's other forms. Where a kernel has one, the backend runs it
+/// unless `COHORT_CPU_SIMD` names another form. For work whose invocations gain from being
+/// done together: the renderer's traversals trace their rays as one stream
+/// (`cohort_kernels::traverse_stream`).
+pub type DispatchForm = fn(&LaneArgs<'_>, u64) -> bool;
 
 /// The builtin values of one invocation (docs/LANGUAGE.md, section 9).
 #[doc(hidden)]

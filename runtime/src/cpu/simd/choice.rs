@@ -111,16 +111,19 @@ pub struct FormCount {
     pub pending: u64,
     /// In its host form because it has no vector form (`COHORT_CPU_SIMD_LOG=1` says why).
     pub host_only: u64,
+    /// In its whole-dispatch form (`cpu::DispatchForm`).
+    pub whole: u64,
 }
 
 impl FormCount {
     /// Each count by its field's name, in field order (`--stats` writes them so).
-    pub fn by_form(&self) -> [(&'static str, u64); 4] {
+    pub fn by_form(&self) -> [(&'static str, u64); 5] {
         [
             ("vector", self.vector),
             ("host", self.host),
             ("pending", self.pending),
             ("host_only", self.host_only),
+            ("whole", self.whole),
         ]
     }
 }
@@ -132,6 +135,7 @@ pub(crate) enum Ran {
     Host,
     Pending,
     HostOnly,
+    Whole,
 }
 
 /// The dispatches of a device's kernels by form, in the order the kernels first ran.
@@ -157,6 +161,7 @@ impl FormCounts {
             Ran::Host => &mut c.host,
             Ran::Pending => &mut c.pending,
             Ran::HostOnly => &mut c.host_only,
+            Ran::Whole => &mut c.whole,
         } += 1;
     }
 

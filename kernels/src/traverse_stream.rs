@@ -1,0 +1,722 @@
+//! The CPU backend's whole-dispatch form of the 8-wide traversals ([`traverse8`] and
+//! [`trace_shadow8`], `cohort::runtime::cpu::DispatchForm`): a dispatch's rays traced as
+//! one stream instead of one ray per invocation.
+//!
+//! Why: a CPU traces an incoherent ray one node at a time, and each step waits on branches
+//! that differ from ray to ray; the 8-wide traversal took about twice Embree's time per
+//! ray (BENCHMARKS.md). A stream turns the work around: at each node, all the rays that
+//! entered it are tested against its eight boxes sixteen at a time (one AVX-512 register
+//! of rays against one broadcast box, no branch per ray), and the indices of the rays that
+//! enter each child are packed into that child's list. A leaf child's triangles are tested
+//! against its list the same way, one broadcast triangle against sixteen rays. Inner
+//! children are visited depth first with their lists, nearest first in the octant order of
+//! the stream's majority direction; a ray's closest hit so far culls it from the boxes
+//! behind it, as in `trace8`.
+//!
+//! The arithmetic is `trace8`'s, operation for operation: the same slab test (`hit4`) and
+//! the same watertight triangle test (`traverse::intersect`), so each ray finds the same
+//! closest t, and the same triangle except at exact ties in t between two triangles (where
+//! the two orders may find a different one first). Any-hit (shadow) results are the same.
+//!
+//! It needs AVX-512 F; elsewhere the forms decline and the backend runs the kernels'
+//! other forms.
+//!
+//! [`traverse8`]: crate::traverse_wide::traverse8
+//! [`trace_shadow8`]: crate::traverse_wide::trace_shadow8
+
+use crate::layout::{Frame, Triangle, DONE, MISS, SLOT_IDLE};
+use crate::shadow::finish_slot;
+use crate::traverse_wide::WideNode;
+use cohort::runtime::cpu::LaneArgs;
+use glam::{UVec4, Vec3, Vec4};
+
+/// Rays per stream at the least when a dispatch is split over the cores: shorter lists
+/// leave the sixteen lanes of a step mostly empty deep in the tree (measured 0.70x of
+/// `trace8`'s time per ray with streams of 4096 rays, 0.33x with 65536).
+const MIN_STREAM: usize = 8192;
+
+/// `traverse8`'s whole-dispatch form: the closest hit of every live ray.
+/// Buffers in parameter order: f, count, idrays, state, ray_o, ray_d, nodes, tris, hits.
+#[doc(hidden)]
+pub fn traverse8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
+    if !supported() {
+        return false;
+    }
+    // SAFETY: the backend binds traverse8's buffers in parameter order, with their types.
+    let (f, count, idrays, state, ray_o, ray_d, nodes, tris, hits) = unsafe {
+        (
+            a.uniform::<Frame>(0),
+            a.storage::<u32>(1),
+            a.storage::<u32>(2),
+            a.storage::<UVec4>(3),
+            a.storage::<Vec4>(4),
+            a.storage::<Vec4>(5),
+            a.storage::<WideNode>(6),
+            a.storage::<Triangle>(7),
+            a.storage_mut::<Vec4>(8),
+        )
+    };
+    let n = (count[0] as u64).min(invocations) as usize;
+    let hits = Out(hits as *mut Vec4);
+    let rays = RaySource {
+        org: ray_o,
+        dir: ray_d,
+        tmin_in_w: true,
+        live: f.has_geometry != 0,
+        skip: Skip::Done(state),
+    };
+    trace_slots(&idrays[..n], false, &rays, nodes, tris, |s, h| {
+        if state[s as usize].w & DONE == 0 {
+            // SAFETY: each slot appears once in the list, so each write is its own.
+            unsafe { *hits.at(s as usize) = h };
+        }
+    });
+    true
+}
+
+/// `trace_shadow8`'s whole-dispatch form: every live slot's shadow ray (any hit), each slot
+/// finished (`finish_slot`) by the thread that traced it.
+/// Buffers: f, count, idrays, shadow_o, shadow_d, nee, nodes, tris, radiance, accum.
+#[doc(hidden)]
+pub fn trace_shadow8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
+    if !supported() {
+        return false;
+    }
+    // SAFETY: the backend binds trace_shadow8's buffers in parameter order, with their
+    // types.
+    let (f, count, idrays, shadow_o, shadow_d, nee, nodes, tris, radiance, accum) = unsafe {
+        (
+            a.uniform::<Frame>(0),
+            a.storage::<u32>(1),
+            a.storage::<u32>(2),
+            a.storage::<Vec4>(3),
+            a.storage::<Vec4>(4),
+            a.storage::<Vec4>(5),
+            a.storage::<WideNode>(6),
+            a.storage::<Triangle>(7),
+            Out(a.storage_mut::<Vec4>(8) as *mut Vec4),
+            Out(a.storage_mut::<Vec4>(9) as *mut Vec4),
+        )
+    };
+    let n = (count[0] as u64).min(invocations) as usize;
+    let finish = |r: u32, visible: bool| {
+        let d = shadow_d[r as usize];
+        // SAFETY: each slot appears once in the list, so each slot's two elements are
+        // written by one thread, through slices of that one element.
+        let (rad, acc) = unsafe {
+            (
+                &mut *std::ptr::slice_from_raw_parts_mut(radiance.at(r as usize), 1),
+                &mut *std::ptr::slice_from_raw_parts_mut(accum.at(r as usize), 1),
+            )
+        };
+        finish_slot(0, d.w, nee[r as usize].truncate(), visible, rad, acc);
+    };
+    let rays = RaySource {
+        org: shadow_o,
+        dir: shadow_d,
+        tmin_in_w: false,
+        live: f.has_geometry != 0,
+        skip: Skip::Unlit(nee),
+    };
+    trace_slots(&idrays[..n], true, &rays, nodes, tris, |r, h| {
+        if shadow_d[r as usize].w != SLOT_IDLE {
+            let lit = nee[r as usize].truncate() != Vec3::ZERO;
+            finish(r, lit && h.w.to_bits() == MISS);
+        }
+    });
+    true
+}
+
+/// Traces `org`/`dir` (by index; the origin's w as in [`RaySource`]) as one stream on this
+/// thread: `trace8`'s result per ray, or `None` where the CPU lacks AVX-512. For tests
+/// and the `stream_traversal` example, which compare it with `trace8` ray by ray.
+#[doc(hidden)]
+pub fn trace_stream(
+    org: &[Vec4],
+    dir: &[Vec4],
+    tmin_in_w: bool,
+    any: bool,
+    nodes: &[WideNode],
+    tris: &[Triangle],
+) -> Option<Vec<Vec4>> {
+    if !supported() {
+        return None;
+    }
+    let ids: Vec<u32> = (0..org.len() as u32).collect();
+    let src = RaySource {
+        org,
+        dir,
+        tmin_in_w,
+        live: true,
+        skip: Skip::None,
+    };
+    let mut st = Stream::default();
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `supported()` checked AVX-512 F; the ids index the rays.
+    unsafe {
+        avx512::setup(&mut st.rays, &src, &ids);
+        avx512::trace(&mut st.rays, nodes, tris, any, &mut st.arena, ids.len());
+    }
+    Some((0..ids.len()).map(|i| st.rays.hit(i)).collect())
+}
+
+/// A pointer the tracing threads write through, each at its own indices.
+#[derive(Clone, Copy)]
+struct Out<T>(*mut T);
+unsafe impl<T> Send for Out<T> {}
+unsafe impl<T> Sync for Out<T> {}
+
+impl<T> Out<T> {
+    /// Element `i` (a method, so that closures capture the whole `Out`, not its pointer).
+    fn at(self, i: usize) -> *mut T {
+        self.0.wrapping_add(i)
+    }
+}
+
+fn supported() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Where a dispatch's rays are: origins and directions by slot; the origin's w is the ray's
+/// tmin (path rays, whose tmax is unbounded) or its tmax (shadow rays, from tmin 0).
+struct RaySource<'a> {
+    org: &'a [Vec4],
+    dir: &'a [Vec4],
+    tmin_in_w: bool,
+    /// The frame has geometry (`Frame::has_geometry`); else every ray misses.
+    live: bool,
+    skip: Skip<'a>,
+}
+
+/// Which listed slots have no ray to trace: their lanes start done, so that the list
+/// need not be filtered first (one pass over it less, on one thread).
+enum Skip<'a> {
+    /// Path rays whose path is done (`state[s].w & DONE`), which `live_slot` skips.
+    Done(&'a [UVec4]),
+    /// Shadow rays of idle slots (direction w = `SLOT_IDLE`) or without a light sample
+    /// (`nee[s]`'s xyz zero), which `trace_shadow8` does not trace.
+    Unlit(&'a [Vec4]),
+    /// Every ray is traced.
+    None,
+}
+
+/// Traces the rays of `slots` in streams spread over the cores and hands each slot's
+/// result, as `trace8` returns it, to `done`.
+fn trace_slots(
+    slots: &[u32],
+    any: bool,
+    src: &RaySource<'_>,
+    nodes: &[WideNode],
+    tris: &[Triangle],
+    done: impl Fn(u32, Vec4) + Sync,
+) {
+    use rayon::prelude::*;
+    if slots.is_empty() {
+        return;
+    }
+    let threads = rayon::current_num_threads().max(1);
+    let chunk = slots.len().div_ceil(threads).max(MIN_STREAM);
+    slots.par_chunks(chunk).for_each(|part| {
+        STREAM.with(|cell| {
+            let st = &mut *cell.borrow_mut();
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `supported()` checked AVX-512 F before any stream was traced.
+            unsafe {
+                avx512::setup(&mut st.rays, src, part);
+                avx512::trace(&mut st.rays, nodes, tris, any, &mut st.arena, part.len())
+            };
+            for (i, &s) in part.iter().enumerate() {
+                done(s, st.rays.hit(i));
+            }
+        })
+    });
+}
+
+/// One thread's stream: its rays and the index lists of the children being visited.
+#[derive(Default)]
+struct Stream {
+    rays: Rays,
+    arena: Vec<u32>,
+}
+
+thread_local! {
+    static STREAM: std::cell::RefCell<Stream> = std::cell::RefCell::new(Stream::default());
+}
+
+/// A stream's rays in structure-of-arrays form: what the box and triangle tests read, and
+/// the closest hit so far (t, u, v, triangle).
+#[derive(Default)]
+struct Rays {
+    ox: Vec<f32>,
+    oy: Vec<f32>,
+    oz: Vec<f32>,
+    ix: Vec<f32>,
+    iy: Vec<f32>,
+    iz: Vec<f32>,
+    kz: Vec<i32>,
+    rx: Vec<f32>,
+    ry: Vec<f32>,
+    rz: Vec<f32>,
+    sx: Vec<f32>,
+    sy: Vec<f32>,
+    sz: Vec<f32>,
+    tmin: Vec<f32>,
+    tmax: Vec<f32>,
+    t: Vec<f32>,
+    u: Vec<f32>,
+    v: Vec<f32>,
+    tri: Vec<u32>,
+}
+
+impl Rays {
+    /// Room for `n` rays and the lanes of a last partial step.
+    fn resize(&mut self, n: usize) {
+        let len = n.next_multiple_of(16);
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.ix,
+            &mut self.iy,
+            &mut self.iz,
+            &mut self.rx,
+            &mut self.ry,
+            &mut self.rz,
+            &mut self.sx,
+            &mut self.sy,
+            &mut self.sz,
+            &mut self.tmin,
+            &mut self.tmax,
+            &mut self.t,
+            &mut self.u,
+            &mut self.v,
+        ] {
+            v.resize(len, 0.0);
+        }
+        self.kz.resize(len, 0);
+        self.tri.resize(len, MISS);
+    }
+
+    /// Ray `i`'s result as `trace8` returns it: (t, u, v, triangle as bits), or (tmax, 0,
+    /// 0, MISS).
+    fn hit(&self, i: usize) -> Vec4 {
+        if self.tri[i] == MISS {
+            Vec4::new(self.tmax[i], 0.0, 0.0, f32::from_bits(MISS))
+        } else {
+            Vec4::new(self.t[i], self.u[i], self.v[i], f32::from_bits(self.tri[i]))
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::{RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, SLOT_IDLE};
+
+    /// A child slot of a node with fewer than eight children (`cohort_scenes`'
+    /// `bvh::wide::EMPTY_SLOT`, whose box no ray enters).
+    const EMPTY_SLOT: u32 = u32::MAX;
+    use glam::Vec3;
+    use std::arch::x86_64::*;
+
+    /// `r` set up with the rays of `slots`, sixteen at a time, as `trace8` sets up one
+    /// (its inverse direction, `dominant_axis`, `rotate` and shear, the same operations).
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; the slots index `src`'s arrays.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn setup(r: &mut Rays, src: &RaySource<'_>, slots: &[u32]) {
+        let n = slots.len();
+        r.resize(n);
+        let zero = _mm512_setzero_ps();
+        let one = _mm512_set1_ps(1.0);
+        let mut c = 0;
+        while c < n {
+            let lm = lanes(n - c);
+            let four = _mm512_slli_epi32::<2>(_mm512_maskz_loadu_epi32(
+                lm,
+                slots.as_ptr().add(c) as *const i32,
+            ));
+            let get = |v: &[glam::Vec4], k: i32| {
+                let idx = _mm512_add_epi32(four, _mm512_set1_epi32(k));
+                _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr() as *const f32)
+            };
+            let (ox, oy, oz, ow) = (
+                get(src.org, 0),
+                get(src.org, 1),
+                get(src.org, 2),
+                get(src.org, 3),
+            );
+            let (dx, dy, dz) = (get(src.dir, 0), get(src.dir, 1), get(src.dir, 2));
+            let (ax, ay, az) = (_mm512_abs_ps(dx), _mm512_abs_ps(dy), _mm512_abs_ps(dz));
+            let k0 =
+                _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, ay) & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, az);
+            let k1 = !k0 & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ay, az);
+            let kz = _mm512_mask_mov_epi32(
+                _mm512_mask_mov_epi32(_mm512_set1_epi32(2), k1, _mm512_set1_epi32(1)),
+                k0,
+                _mm512_setzero_si512(),
+            );
+            let rot = |x, y, z| {
+                (
+                    _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, x, z), y),
+                    _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, y, x), z),
+                    _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, z, y), x),
+                )
+            };
+            let (drx, dry, drz) = rot(dx, dy, dz);
+            let (rx, ry, rz) = rot(ox, oy, oz);
+            let (tmin, tmax) = if src.tmin_in_w {
+                (ow, _mm512_set1_ps(3.0e38))
+            } else {
+                (zero, ow)
+            };
+            let dot = |x, y, z| {
+                _mm512_add_ps(
+                    _mm512_add_ps(_mm512_mul_ps(x, x), _mm512_mul_ps(y, y)),
+                    _mm512_mul_ps(z, z),
+                )
+            };
+            let skip = match src.skip {
+                Skip::Done(state) => {
+                    let w = _mm512_add_epi32(four, _mm512_set1_epi32(3));
+                    let w = _mm512_mask_i32gather_epi32::<4>(
+                        _mm512_setzero_si512(),
+                        lm,
+                        w,
+                        state.as_ptr() as *const i32,
+                    );
+                    _mm512_test_epi32_mask(w, _mm512_set1_epi32(DONE as i32))
+                }
+                Skip::Unlit(nee) => {
+                    let idle = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(
+                        get(src.dir, 3),
+                        _mm512_set1_ps(SLOT_IDLE),
+                    );
+                    // `ld != Vec3::ZERO`: some component unequal to zero (NaN included).
+                    let lit = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 0), zero)
+                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 1), zero)
+                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 2), zero);
+                    idle | !lit
+                }
+                Skip::None => 0,
+            };
+            let go = if src.live { 0xffff } else { 0 }
+                & !skip
+                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(dot(dx, dy, dz), zero)
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dot(ox, oy, oz), _mm512_set1_ps(1.0e36));
+            let put = |v: &mut Vec<f32>, x| _mm512_storeu_ps(v.as_mut_ptr().add(c), x);
+            put(&mut r.ox, ox);
+            put(&mut r.oy, oy);
+            put(&mut r.oz, oz);
+            put(&mut r.ix, _mm512_div_ps(one, dx));
+            put(&mut r.iy, _mm512_div_ps(one, dy));
+            put(&mut r.iz, _mm512_div_ps(one, dz));
+            put(&mut r.rx, rx);
+            put(&mut r.ry, ry);
+            put(&mut r.rz, rz);
+            put(&mut r.sx, _mm512_div_ps(drx, drz));
+            put(&mut r.sy, _mm512_div_ps(dry, drz));
+            put(&mut r.sz, _mm512_div_ps(one, drz));
+            put(&mut r.tmin, tmin);
+            put(&mut r.tmax, tmax);
+            // A ray `trace8` stops before its first node gets a t no box passes.
+            put(
+                &mut r.t,
+                _mm512_mask_blend_ps(go, _mm512_set1_ps(-1.0), tmax),
+            );
+            put(&mut r.u, zero);
+            put(&mut r.v, zero);
+            _mm512_storeu_si512(r.kz.as_mut_ptr().add(c) as *mut __m512i, kz);
+            _mm512_storeu_si512(
+                r.tri.as_mut_ptr().add(c) as *mut __m512i,
+                _mm512_set1_epi32(MISS as i32),
+            );
+            c += 16;
+        }
+    }
+
+    /// Slot `s`'s box of the node (`a` holds slots 0..4, `b` 4..8): lo and hi per axis.
+    fn slot_box(a: &WideNode, b: &WideNode, s: usize) -> [f32; 6] {
+        let n = if s >= 4 { b } else { a };
+        let k = s & 3;
+        [
+            n.lo_x[k], n.hi_x[k], n.lo_y[k], n.hi_y[k], n.lo_z[k], n.hi_z[k],
+        ]
+    }
+
+    fn slot_child(a: &WideNode, b: &WideNode, s: usize) -> u32 {
+        let n = if s >= 4 { b } else { a };
+        n.child[s & 3]
+    }
+
+    /// Lanes `0..n` of a step (n <= 16).
+    fn lanes(n: usize) -> __mmask16 {
+        if n >= 16 {
+            0xffff
+        } else {
+            (1u16 << n) - 1
+        }
+    }
+
+    /// Traces every ray of `r` through the tree (`any`: stop each at its first hit).
+    ///
+    /// # Safety
+    /// Needs AVX-512 F.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn trace(
+        r: &mut Rays,
+        nodes: &[WideNode],
+        tris: &[Triangle],
+        any: bool,
+        arena: &mut Vec<u32>,
+        n: usize,
+    ) {
+        if n == 0 || nodes.is_empty() {
+            return;
+        }
+        // The root's list, then the children's lists of each node on the way down, each
+        // in a region of its parent's length plus one step (a step stores sixteen lanes).
+        if arena.len() < n + 16 {
+            arena.resize(n + 16, 0);
+        }
+        for (i, x) in arena[..n].iter_mut().enumerate() {
+            *x = i as u32;
+        }
+        // (node, list start, list end, where its children's lists go)
+        let mut stack: Vec<(u32, usize, usize, usize)> = vec![(0, 0, n, n + 16)];
+        let scale = _mm512_set1_ps(1.0000004);
+        let zero = _mm512_setzero_ps();
+        while let Some((node, s, e, top)) = stack.pop() {
+            let a = &nodes[node as usize];
+            let b = &nodes[node as usize + 1];
+            let m = e - s;
+            let stride = m + 16;
+            if arena.len() < top + 8 * stride {
+                arena.resize(top + 8 * stride, 0);
+            }
+            let base = arena.as_mut_ptr();
+            let mut cnt = [0usize; 8];
+            // The node's children (a node of fewer than eight has empty slots, which no
+            // ray enters: skipped instead of tested).
+            let mut slots = [0usize; 8];
+            let mut boxes = [[0f32; 6]; 8];
+            let mut filled = 0;
+            for k in 0..8 {
+                if slot_child(a, b, k) != EMPTY_SLOT {
+                    slots[filled] = k;
+                    boxes[filled] = slot_box(a, b, k);
+                    filled += 1;
+                }
+            }
+            let mut negs = [0u32; 3];
+            let mut c = s;
+            while c < e {
+                let lm = lanes(e - c);
+                let idx = _mm512_maskz_loadu_epi32(lm, base.add(c) as *const i32);
+                let g = |v: &Vec<f32>| _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr());
+                let (ox, oy, oz) = (g(&r.ox), g(&r.oy), g(&r.oz));
+                let (ix, iy, iz) = (g(&r.ix), g(&r.iy), g(&r.iz));
+                let tmax = g(&r.t);
+                let nx = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, ix, zero);
+                let ny = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iy, zero);
+                let nz = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iz, zero);
+                negs[0] += nx.count_ones();
+                negs[1] += ny.count_ones();
+                negs[2] += nz.count_ones();
+                for (&k, bx) in slots[..filled].iter().zip(&boxes[..filled]) {
+                    // `hit4`, operation for operation: the near slab is the box's max where
+                    // the inverse direction is negative.
+                    let (lo_x, hi_x) = (_mm512_set1_ps(bx[0]), _mm512_set1_ps(bx[1]));
+                    let (lo_y, hi_y) = (_mm512_set1_ps(bx[2]), _mm512_set1_ps(bx[3]));
+                    let (lo_z, hi_z) = (_mm512_set1_ps(bx[4]), _mm512_set1_ps(bx[5]));
+                    let ax = _mm512_mask_blend_ps(nx, lo_x, hi_x);
+                    let fx = _mm512_mask_blend_ps(nx, hi_x, lo_x);
+                    let ay = _mm512_mask_blend_ps(ny, lo_y, hi_y);
+                    let fy = _mm512_mask_blend_ps(ny, hi_y, lo_y);
+                    let az = _mm512_mask_blend_ps(nz, lo_z, hi_z);
+                    let fz = _mm512_mask_blend_ps(nz, hi_z, lo_z);
+                    let near = _mm512_max_ps(
+                        _mm512_max_ps(
+                            _mm512_max_ps(
+                                _mm512_mul_ps(_mm512_sub_ps(ax, ox), ix),
+                                _mm512_mul_ps(_mm512_sub_ps(ay, oy), iy),
+                            ),
+                            _mm512_mul_ps(_mm512_sub_ps(az, oz), iz),
+                        ),
+                        zero,
+                    );
+                    let far = _mm512_mul_ps(
+                        _mm512_min_ps(
+                            _mm512_min_ps(
+                                _mm512_min_ps(
+                                    _mm512_mul_ps(_mm512_sub_ps(fx, ox), ix),
+                                    _mm512_mul_ps(_mm512_sub_ps(fy, oy), iy),
+                                ),
+                                _mm512_mul_ps(_mm512_sub_ps(fz, oz), iz),
+                            ),
+                            tmax,
+                        ),
+                        scale,
+                    );
+                    let hit = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(lm, near, far);
+                    if hit != 0 {
+                        // Packed in a register and stored whole: a compress to memory is
+                        // microcoded on Zen 4; the region has room for the sixteen lanes.
+                        let dst = base.add(top + k * stride + cnt[k]);
+                        _mm512_storeu_si512(
+                            dst as *mut __m512i,
+                            _mm512_maskz_compress_epi32(hit, idx),
+                        );
+                        cnt[k] += hit.count_ones() as usize;
+                    }
+                }
+                c += 16;
+            }
+            let half = (m as u32).div_ceil(2);
+            let oct = (negs[0] > half) as usize
+                | ((negs[1] > half) as usize) << 1
+                | ((negs[2] > half) as usize) << 2;
+            // The leaf bits of octant 0 are in slot order.
+            let leaf_bits = (a.meta.x & 0xff) as usize;
+            for p in 0..8 {
+                let k = p ^ oct;
+                if cnt[k] > 0 && leaf_bits & (1 << k) != 0 {
+                    let child = slot_child(a, b, k);
+                    let first = child & 0x0fff_ffff;
+                    let count = ((child >> 28) & 7) + 1;
+                    let from = top + k * stride;
+                    leaf(r, tris, &arena[from..from + cnt[k]], first, count, any);
+                }
+            }
+            // Inner children far first, so that the nearest is visited next.
+            let next = top + 8 * stride;
+            for p in (0..8).rev() {
+                let k = p ^ oct;
+                if cnt[k] > 0 && leaf_bits & (1 << k) == 0 {
+                    let from = top + k * stride;
+                    stack.push((slot_child(a, b, k), from, from + cnt[k], next));
+                }
+            }
+        }
+    }
+
+    /// The rays `ids` against triangles `first..first + count`, sixteen rays at a time, as
+    /// `traverse::leaf_hits` does for one. With `any`, a ray that hits is done: its t
+    /// becomes -1, which no later box or triangle test passes.
+    #[target_feature(enable = "avx512f")]
+    unsafe fn leaf(
+        r: &mut Rays,
+        tris: &[Triangle],
+        ids: &[u32],
+        first: u32,
+        count: u32,
+        any: bool,
+    ) {
+        let zero = _mm512_setzero_ps();
+        let izero = _mm512_setzero_si512();
+        let mut c = 0;
+        while c < ids.len() {
+            let lm = lanes(ids.len() - c);
+            let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr().add(c) as *const i32);
+            let g = |v: &Vec<f32>| _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr());
+            let (rx, ry, rz) = (g(&r.rx), g(&r.ry), g(&r.rz));
+            let (sx, sy, sz) = (g(&r.sx), g(&r.sy), g(&r.sz));
+            let tmin = g(&r.tmin);
+            let kz = _mm512_mask_i32gather_epi32::<4>(izero, lm, idx, r.kz.as_ptr());
+            let k0 = _mm512_cmpeq_epi32_mask(kz, izero);
+            let k1 = _mm512_cmpeq_epi32_mask(kz, _mm512_set1_epi32(1));
+            // The hit so far; only the lanes a triangle hits here are written back, so u, v
+            // and the triangle need not be read.
+            let mut bt = g(&r.t);
+            let mut bu = zero;
+            let mut bv = zero;
+            let mut btri = izero;
+            let mut changed: __mmask16 = 0;
+            // `rotate(v, kz)` per lane, less the ray's rotated origin: kz 0 -> (y, z, x),
+            // 1 -> (z, x, y), 2 -> (x, y, z).
+            let rel = |v: Vec3| {
+                let (x, y, z) = (
+                    _mm512_set1_ps(v.x),
+                    _mm512_set1_ps(v.y),
+                    _mm512_set1_ps(v.z),
+                );
+                let px = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, x, z), y);
+                let py = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, y, x), z);
+                let pz = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, z, y), x);
+                (
+                    _mm512_sub_ps(px, rx),
+                    _mm512_sub_ps(py, ry),
+                    _mm512_sub_ps(pz, rz),
+                )
+            };
+            for k in first..first + count {
+                let t = &tris[k as usize];
+                // `traverse::intersect`, operation for operation.
+                let (a_x, a_y, a_z) = rel(t.v0);
+                let (b_x, b_y, b_z) = rel(t.v1);
+                let (c_x, c_y, c_z) = rel(t.v2);
+                let ax = _mm512_sub_ps(a_x, _mm512_mul_ps(sx, a_z));
+                let ay = _mm512_sub_ps(a_y, _mm512_mul_ps(sy, a_z));
+                let bx = _mm512_sub_ps(b_x, _mm512_mul_ps(sx, b_z));
+                let by = _mm512_sub_ps(b_y, _mm512_mul_ps(sy, b_z));
+                let cx = _mm512_sub_ps(c_x, _mm512_mul_ps(sx, c_z));
+                let cy = _mm512_sub_ps(c_y, _mm512_mul_ps(sy, c_z));
+                let u = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+                let v = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+                let w = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+                let lt = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(u, zero)
+                    | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero)
+                    | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(w, zero);
+                let gt = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(u, zero)
+                    | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, zero)
+                    | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(w, zero);
+                let det = _mm512_add_ps(_mm512_add_ps(u, v), w);
+                let ok = lm & !(lt & gt) & _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(det, zero);
+                if ok == 0 {
+                    continue;
+                }
+                let szz = |z| _mm512_mul_ps(sz, z);
+                let tt = _mm512_div_ps(
+                    _mm512_add_ps(
+                        _mm512_add_ps(_mm512_mul_ps(u, szz(a_z)), _mm512_mul_ps(v, szz(b_z))),
+                        _mm512_mul_ps(w, szz(c_z)),
+                    ),
+                    det,
+                );
+                let hit = ok
+                    & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(tt, tmin)
+                    & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(tt, bt);
+                if hit != 0 {
+                    bt = _mm512_mask_blend_ps(hit, bt, tt);
+                    bu = _mm512_mask_blend_ps(hit, bu, _mm512_div_ps(v, det));
+                    bv = _mm512_mask_blend_ps(hit, bv, _mm512_div_ps(w, det));
+                    btri = _mm512_mask_blend_epi32(hit, btri, _mm512_set1_epi32(k as i32));
+                    changed |= hit;
+                }
+            }
+            if changed != 0 {
+                if any {
+                    // Only whether it hit is wanted (`trace_shadow8`): its t ends the traversal.
+                    bt = _mm512_mask_blend_ps(changed, bt, _mm512_set1_ps(-1.0));
+                }
+                _mm512_mask_i32scatter_ps::<4>(r.t.as_mut_ptr(), changed, idx, bt);
+                _mm512_mask_i32scatter_ps::<4>(r.u.as_mut_ptr(), changed, idx, bu);
+                _mm512_mask_i32scatter_ps::<4>(r.v.as_mut_ptr(), changed, idx, bv);
+                _mm512_mask_i32scatter_epi32::<4>(
+                    r.tri.as_mut_ptr() as *mut i32,
+                    changed,
+                    idx,
+                    btri,
+                );
+            }
+            c += 16;
+        }
+    }
+}
