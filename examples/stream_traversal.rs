@@ -1,7 +1,7 @@
 //! What the CPU backend's ray-stream traversal (`cohort_kernels::traverse_stream`) costs
 //! against `traverse_wide::trace8` one ray at a time, on the rays of `traversal_counts`
-//! (shuffled, the renderer's order after the first bounce), on one thread: nanoseconds per
-//! ray of each, with streams of 4096, 16384 and 65536 rays, closest and any hit, and how
+//! (shuffled, the renderer's order after the first bounce) and on shadow segments from
+//! the primary hits to points on the emitters, on one thread: nanoseconds per ray of each, with streams of 4096, 16384 and 65536 rays, closest and any hit, and how
 //! many rays' results differ (t or triangle for closest hits: the two may pick different
 //! triangles at exact ties in t; hit or miss for any hits). The stream's time includes
 //! setting its rays up.
@@ -62,23 +62,57 @@ fn main() {
     let (o3, d3) = shuffled(&o, &d);
     let (o4, d4) = shuffled(&o2, &d2);
     let (o3, o4) = (zero_w(o3), zero_w(o4));
+    // Shadow segments as next-event estimation traces them: from each primary hit to a
+    // point on an emitter, tmax (in the origin's w) just short of it.
+    let lights: Vec<[glam::Vec3; 3]> = (0..scene.triangles.len())
+        .filter(|&i| scene.material_of(i).emission.is_some())
+        .map(|i| scene.triangles.vertices(i))
+        .collect();
+    let mut seed = 0x0005_DEEC_E66D_u64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let (mut o5, mut d5) = (Vec::new(), Vec::new());
+    for ((o, d), h) in o.iter().zip(&d).zip(&hits) {
+        if h.w.to_bits() == MISS || lights.is_empty() {
+            continue;
+        }
+        let p = o.truncate() + h.x * d.truncate();
+        let [a, b, c] = lights[(next() * lights.len() as f32) as usize % lights.len()];
+        let (u, v) = (next().sqrt(), next());
+        let to = a * (1.0 - u) + b * (u * (1.0 - v)) + c * (u * v) - p;
+        let len = to.length();
+        let dir = to / len;
+        // Off the surface by a little, as the renderer's shadow rays start.
+        o5.push((p + dir * 1.0e-4).extend(len * 0.999));
+        d5.push(dir.extend(1.0));
+    }
+    let (o5, d5) = shuffled(&o5, &d5);
     println!(
         "{path}: {} triangles, {} 8-wide nodes",
         tris.len(),
         nodes.len() / 2
     );
     println!("rays              query    stream  trace8 ns  stream ns  ratio  differ");
-    for (name, o, d) in [
-        ("primary_shuffled", &o3, &d3),
-        ("diffuse_shuffled", &o4, &d4),
-    ] {
-        for any in [false, true] {
+    let sets = [
+        ("primary_shuffled", &o3, &d3, false),
+        ("diffuse_shuffled", &o4, &d4, false),
+        ("shadow_shuffled", &o5, &d5, true),
+    ];
+    for (name, o, d, segments) in sets {
+        // Segments (shadow rays) carry tmax in the origin's w, the others tmin (0).
+        let queries: &[bool] = if segments { &[true] } else { &[false, true] };
+        for &any in queries {
             let one = |o: &Vec4, d: &Vec4| {
+                let (tmin, tmax) = if segments { (0.0, o.w) } else { (o.w, 3.0e38) };
                 let (o, d) = (o.truncate(), d.truncate());
                 if any {
-                    trace8::<AnyHit>(o, d, 0.0, 3.0e38, &f, nodes, tris)
+                    trace8::<AnyHit>(o, d, tmin, tmax, &f, nodes, tris)
                 } else {
-                    trace8::<Closest>(o, d, 0.0, 3.0e38, &f, nodes, tris)
+                    trace8::<Closest>(o, d, tmin, tmax, &f, nodes, tris)
                 }
             };
             let reference: Vec<Vec4> = o.iter().zip(d.iter()).map(|(o, d)| one(o, d)).collect();
@@ -93,8 +127,7 @@ fn main() {
                 let run = || -> Option<Vec<Vec4>> {
                     let mut all = Vec::with_capacity(o.len());
                     for (oc, dc) in o.chunks(stream).zip(d.chunks(stream)) {
-                        // Shadow rays carry tmax in w; these carry tmin (0) and no bound.
-                        all.extend(trace_stream(oc, dc, true, any, nodes, tris)?);
+                        all.extend(trace_stream(oc, dc, !segments, any, nodes, tris)?);
                     }
                     Some(all)
                 };
