@@ -248,8 +248,10 @@ impl CpuDevice {
             return Ok(());
         }
         let invocations = total * u64::from(cmd.workgroup_size);
-        if let Some(host) = cmd.host.filter(|h| h.dispatch.is_some()) {
-            if self.forms == cpu::simd::Forms::Measured && run_whole(cmd, host, invocations)? {
+        if let Some((whole, host)) = cmd.host.and_then(|h| Some((h.dispatch?, h))) {
+            if self.forms == cpu::simd::Forms::Measured
+                && run_whole(cmd, whole, &host, invocations)?
+            {
                 self.ran.add(&cmd.name, cpu::simd::Ran::Whole);
                 return Ok(());
             }
@@ -336,10 +338,12 @@ fn run_host(cmd: &Cmd, host: HostKernel, groups: [u32; 3], total: u64) -> Result
 }
 
 /// A dispatch of a kernel's whole-dispatch form: whether it ran (`cpu::DispatchForm`).
-fn run_whole(cmd: &Cmd, host: HostKernel, invocations: u64) -> Result<bool> {
-    let Some(whole) = host.dispatch else {
-        return Ok(false);
-    };
+fn run_whole(
+    cmd: &Cmd,
+    whole: cpu::DispatchForm,
+    host: &HostKernel,
+    invocations: u64,
+) -> Result<bool> {
     let bufs = host_bufs(cmd);
     let args = cpu::LaneArgs {
         bufs: &bufs,
