@@ -256,74 +256,60 @@ thread_local! {
     static STREAM: std::cell::RefCell<Stream> = std::cell::RefCell::new(Stream::default());
 }
 
-/// A stream's rays in structure-of-arrays form: what the box and triangle tests read, and
-/// the closest hit so far (t, u, v, triangle).
+/// A stream's rays: for each of the two tests a record of eight floats (32 bytes) per
+/// ray, which a step reads as sixteen 32-byte loads and an 8x16 transpose (a gather
+/// fetches one element at a time, and sixteen of them per field took about half of a
+/// step's time), and the closest hit so far: t (in the box record, where the box test
+/// reads it as its tmax), u, v and the triangle.
 #[derive(Default)]
 struct Rays {
-    ox: Vec<f32>,
-    oy: Vec<f32>,
-    oz: Vec<f32>,
-    ix: Vec<f32>,
-    iy: Vec<f32>,
-    iz: Vec<f32>,
-    kz: Vec<i32>,
-    rx: Vec<f32>,
-    ry: Vec<f32>,
-    rz: Vec<f32>,
-    sx: Vec<f32>,
-    sy: Vec<f32>,
-    sz: Vec<f32>,
-    tmin: Vec<f32>,
-    tmax: Vec<f32>,
-    t: Vec<f32>,
+    /// [`BOX`]'s fields per ray.
+    boxr: Vec<[f32; 8]>,
+    /// [`TRI`]'s fields per ray.
+    trir: Vec<[f32; 8]>,
     u: Vec<f32>,
     v: Vec<f32>,
     tri: Vec<u32>,
+}
+
+/// A box-test record's fields, by index: origin, inverse direction, the closest t so far,
+/// and tmax (a miss's result).
+mod field {
+    pub const T: usize = 6;
+    pub const TMAX: usize = 7;
 }
 
 impl Rays {
     /// Room for `n` rays and the lanes of a last partial step.
     fn resize(&mut self, n: usize) {
         let len = n.next_multiple_of(16);
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.ix,
-            &mut self.iy,
-            &mut self.iz,
-            &mut self.rx,
-            &mut self.ry,
-            &mut self.rz,
-            &mut self.sx,
-            &mut self.sy,
-            &mut self.sz,
-            &mut self.tmin,
-            &mut self.tmax,
-            &mut self.t,
-            &mut self.u,
-            &mut self.v,
-        ] {
-            v.resize(len, 0.0);
-        }
-        self.kz.resize(len, 0);
+        self.boxr.resize(len, [0.0; 8]);
+        self.trir.resize(len, [0.0; 8]);
+        self.u.resize(len, 0.0);
+        self.v.resize(len, 0.0);
         self.tri.resize(len, MISS);
     }
 
     /// Ray `i`'s result as `trace8` returns it: (t, u, v, triangle as bits), or (tmax, 0,
     /// 0, MISS).
     fn hit(&self, i: usize) -> Vec4 {
+        let b = &self.boxr[i];
         if self.tri[i] == MISS {
-            Vec4::new(self.tmax[i], 0.0, 0.0, f32::from_bits(MISS))
+            Vec4::new(b[field::TMAX], 0.0, 0.0, f32::from_bits(MISS))
         } else {
-            Vec4::new(self.t[i], self.u[i], self.v[i], f32::from_bits(self.tri[i]))
+            Vec4::new(
+                b[field::T],
+                self.u[i],
+                self.v[i],
+                f32::from_bits(self.tri[i]),
+            )
         }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, SLOT_IDLE};
+    use super::{field, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, SLOT_IDLE};
 
     /// A child slot of a node with fewer than eight children (`cohort_scenes`'
     /// `bvh::wide::EMPTY_SLOT`, whose box no ray enters).
@@ -417,34 +403,138 @@ mod avx512 {
                 & !skip
                 & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(dot(dx, dy, dz), zero)
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dot(ox, oy, oz), _mm512_set1_ps(1.0e36));
-            let put = |v: &mut Vec<f32>, x| _mm512_storeu_ps(v.as_mut_ptr().add(c), x);
-            put(&mut r.ox, ox);
-            put(&mut r.oy, oy);
-            put(&mut r.oz, oz);
-            put(&mut r.ix, _mm512_div_ps(one, dx));
-            put(&mut r.iy, _mm512_div_ps(one, dy));
-            put(&mut r.iz, _mm512_div_ps(one, dz));
-            put(&mut r.rx, rx);
-            put(&mut r.ry, ry);
-            put(&mut r.rz, rz);
-            put(&mut r.sx, _mm512_div_ps(drx, drz));
-            put(&mut r.sy, _mm512_div_ps(dry, drz));
-            put(&mut r.sz, _mm512_div_ps(one, drz));
-            put(&mut r.tmin, tmin);
-            put(&mut r.tmax, tmax);
             // A ray `trace8` stops before its first node gets a t no box passes.
-            put(
-                &mut r.t,
-                _mm512_mask_blend_ps(go, _mm512_set1_ps(-1.0), tmax),
+            let t = _mm512_mask_blend_ps(go, _mm512_set1_ps(-1.0), tmax);
+            let (ix, iy, iz) = (
+                _mm512_div_ps(one, dx),
+                _mm512_div_ps(one, dy),
+                _mm512_div_ps(one, dz),
             );
-            put(&mut r.u, zero);
-            put(&mut r.v, zero);
-            _mm512_storeu_si512(r.kz.as_mut_ptr().add(c) as *mut __m512i, kz);
+            store_records(
+                r.boxr.as_mut_ptr().add(c),
+                [ox, oy, oz, ix, iy, iz, t, tmax],
+            );
+            store_records(
+                r.trir.as_mut_ptr().add(c),
+                [
+                    rx,
+                    ry,
+                    rz,
+                    _mm512_div_ps(drx, drz),
+                    _mm512_div_ps(dry, drz),
+                    _mm512_div_ps(one, drz),
+                    tmin,
+                    _mm512_castsi512_ps(kz),
+                ],
+            );
+            _mm512_storeu_ps(r.u.as_mut_ptr().add(c), zero);
+            _mm512_storeu_ps(r.v.as_mut_ptr().add(c), zero);
             _mm512_storeu_si512(
                 r.tri.as_mut_ptr().add(c) as *mut __m512i,
                 _mm512_set1_epi32(MISS as i32),
             );
             c += 16;
+        }
+    }
+
+    /// The 8x8 transposes of the two halves of eight registers, each half a row of eight
+    /// floats: output `j` holds column `j` of rows 0-3 of the low halves, of rows 0-3 of the
+    /// high halves, of rows 4-7 of the low halves, then of rows 4-7 of the high halves (in
+    /// that order, four lanes each).
+    #[target_feature(enable = "avx512f")]
+    unsafe fn transpose(z: [__m512; 8]) -> [__m512; 8] {
+        let t = [
+            _mm512_unpacklo_ps(z[0], z[1]),
+            _mm512_unpackhi_ps(z[0], z[1]),
+            _mm512_unpacklo_ps(z[2], z[3]),
+            _mm512_unpackhi_ps(z[2], z[3]),
+            _mm512_unpacklo_ps(z[4], z[5]),
+            _mm512_unpackhi_ps(z[4], z[5]),
+            _mm512_unpacklo_ps(z[6], z[7]),
+            _mm512_unpackhi_ps(z[6], z[7]),
+        ];
+        // Columns 0/4, 1/5, 2/6 and 3/7 of rows 0-3 (u[0..4]) and 4-7 (u[4..8]).
+        let u = [
+            _mm512_shuffle_ps::<0x44>(t[0], t[2]),
+            _mm512_shuffle_ps::<0xee>(t[0], t[2]),
+            _mm512_shuffle_ps::<0x44>(t[1], t[3]),
+            _mm512_shuffle_ps::<0xee>(t[1], t[3]),
+            _mm512_shuffle_ps::<0x44>(t[4], t[6]),
+            _mm512_shuffle_ps::<0xee>(t[4], t[6]),
+            _mm512_shuffle_ps::<0x44>(t[5], t[7]),
+            _mm512_shuffle_ps::<0xee>(t[5], t[7]),
+        ];
+        [
+            _mm512_shuffle_f32x4::<0x88>(u[0], u[4]),
+            _mm512_shuffle_f32x4::<0x88>(u[1], u[5]),
+            _mm512_shuffle_f32x4::<0x88>(u[2], u[6]),
+            _mm512_shuffle_f32x4::<0x88>(u[3], u[7]),
+            _mm512_shuffle_f32x4::<0xdd>(u[0], u[4]),
+            _mm512_shuffle_f32x4::<0xdd>(u[1], u[5]),
+            _mm512_shuffle_f32x4::<0xdd>(u[2], u[6]),
+            _mm512_shuffle_f32x4::<0xdd>(u[3], u[7]),
+        ]
+    }
+
+    /// The eight fields of the records of sixteen rays, field `k` in output `k`, ray `j`
+    /// in lane `j`: the rays at `ids` (sixteen indices) where `lm` is full, else those of
+    /// `idx` (zero in the lanes outside `lm`, which read ray 0's record).
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; every index in `lm`'s lanes is a record of `recs`, and record 0 is.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn load_records(
+        recs: *const [f32; 8],
+        ids: *const u32,
+        lm: __mmask16,
+        idx: __m512i,
+    ) -> [__m512; 8] {
+        let mut part = [0u32; 16];
+        let ids = if lm == 0xffff {
+            ids
+        } else {
+            _mm512_storeu_si512(part.as_mut_ptr() as *mut __m512i, idx);
+            part.as_ptr()
+        };
+        let rec = |j: usize| _mm256_loadu_ps(recs.add(*ids.add(j) as usize) as *const f32);
+        // Rays j and j + 4 (j < 4), then j + 4 and j + 8 (4 <= j < 8), so that the
+        // transpose's lanes come out in ray order.
+        let pair = |lo: usize, hi: usize| {
+            // (As doubles: the f32x8 forms need AVX-512 DQ.)
+            _mm512_castpd_ps(_mm512_insertf64x4::<1>(
+                _mm512_castps_pd(_mm512_castps256_ps512(rec(lo))),
+                _mm256_castps_pd(rec(hi)),
+            ))
+        };
+        transpose([
+            pair(0, 4),
+            pair(1, 5),
+            pair(2, 6),
+            pair(3, 7),
+            pair(8, 12),
+            pair(9, 13),
+            pair(10, 14),
+            pair(11, 15),
+        ])
+    }
+
+    /// Stores field `k` of sixteen rays (ray `j` in lane `j` of `fields[k]`) as the
+    /// records `out[0..16]`.
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; `out` has sixteen records.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn store_records(out: *mut [f32; 8], fields: [__m512; 8]) {
+        let cols = transpose(fields);
+        // Column j holds fields 0-3 of rays j and j + 8, then fields 4-7 of the two.
+        let order = _mm512_setr_epi32(0, 1, 2, 3, 8, 9, 10, 11, 4, 5, 6, 7, 12, 13, 14, 15);
+        for (j, &col) in cols.iter().enumerate() {
+            let both = _mm512_permutexvar_ps(order, col);
+            _mm256_storeu_ps(out.add(j) as *mut f32, _mm512_castps512_ps256(both));
+            _mm256_storeu_ps(
+                out.add(j + 8) as *mut f32,
+                _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(both))),
+            );
         }
     }
 
@@ -526,10 +616,8 @@ mod avx512 {
             while c < e {
                 let lm = lanes(e - c);
                 let idx = _mm512_maskz_loadu_epi32(lm, base.add(c) as *const i32);
-                let g = |v: &Vec<f32>| _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr());
-                let (ox, oy, oz) = (g(&r.ox), g(&r.oy), g(&r.oz));
-                let (ix, iy, iz) = (g(&r.ix), g(&r.iy), g(&r.iz));
-                let tmax = g(&r.t);
+                let [ox, oy, oz, ix, iy, iz, tmax, _] =
+                    load_records(r.boxr.as_ptr(), base.add(c), lm, idx);
                 let nx = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, ix, zero);
                 let ny = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iy, zero);
                 let nz = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iz, zero);
@@ -631,16 +719,17 @@ mod avx512 {
         while c < ids.len() {
             let lm = lanes(ids.len() - c);
             let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr().add(c) as *const i32);
-            let g = |v: &Vec<f32>| _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr());
-            let (rx, ry, rz) = (g(&r.rx), g(&r.ry), g(&r.rz));
-            let (sx, sy, sz) = (g(&r.sx), g(&r.sy), g(&r.sz));
-            let tmin = g(&r.tmin);
-            let kz = _mm512_mask_i32gather_epi32::<4>(izero, lm, idx, r.kz.as_ptr());
+            let [rx, ry, rz, sx, sy, sz, tmin, kz] =
+                load_records(r.trir.as_ptr(), ids.as_ptr().add(c), lm, idx);
+            let kz = _mm512_castps_si512(kz);
+            // The closest t so far, in the box records.
+            let t_at = (r.boxr.as_mut_ptr() as *mut f32).add(field::T);
+            let rec = _mm512_slli_epi32::<3>(idx);
             let k0 = _mm512_cmpeq_epi32_mask(kz, izero);
             let k1 = _mm512_cmpeq_epi32_mask(kz, _mm512_set1_epi32(1));
             // The hit so far; only the lanes a triangle hits here are written back, so u, v
             // and the triangle need not be read.
-            let mut bt = g(&r.t);
+            let mut bt = _mm512_mask_i32gather_ps::<4>(zero, lm, rec, t_at);
             let mut bu = zero;
             let mut bv = zero;
             let mut btri = izero;
@@ -712,7 +801,7 @@ mod avx512 {
                     // Only whether it hit is wanted (`trace_shadow8`): its t ends the traversal.
                     bt = _mm512_mask_blend_ps(changed, bt, _mm512_set1_ps(-1.0));
                 }
-                _mm512_mask_i32scatter_ps::<4>(r.t.as_mut_ptr(), changed, idx, bt);
+                _mm512_mask_i32scatter_ps::<4>(t_at, changed, rec, bt);
                 _mm512_mask_i32scatter_ps::<4>(r.u.as_mut_ptr(), changed, idx, bu);
                 _mm512_mask_i32scatter_ps::<4>(r.v.as_mut_ptr(), changed, idx, bv);
                 _mm512_mask_i32scatter_epi32::<4>(
@@ -723,6 +812,55 @@ mod avx512 {
                 );
             }
             c += 16;
+        }
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::avx512::{load_records, store_records};
+    use std::arch::x86_64::*;
+
+    /// Records stored from sixteen rays' fields read back, in any order of rays, as the
+    /// same fields lane by lane, also for a step of fewer than sixteen rays.
+    #[test]
+    fn records_round_trip_through_the_transposes() {
+        if !super::supported() {
+            return;
+        }
+        let value = |ray: usize, k: usize| (ray * 8 + k) as f32 + 0.5;
+        let mut recs = vec![[0f32; 8]; 32];
+        // SAFETY: AVX-512 F was checked; 32 records hold both steps of sixteen.
+        unsafe {
+            for step in 0..2 {
+                let fields: [__m512; 8] = std::array::from_fn(|k| {
+                    let lane: [f32; 16] = std::array::from_fn(|j| value(step * 16 + j, k));
+                    _mm512_loadu_ps(lane.as_ptr())
+                });
+                store_records(recs.as_mut_ptr().add(step * 16), fields);
+            }
+        }
+        for (ray, rec) in recs.iter().enumerate() {
+            assert_eq!(*rec, std::array::from_fn(|k| value(ray, k)), "record {ray}");
+        }
+        let ids: [u32; 16] = [31, 0, 7, 16, 3, 30, 9, 12, 1, 22, 5, 27, 18, 2, 11, 25];
+        for n in [16usize, 5] {
+            let lm: __mmask16 = if n == 16 { 0xffff } else { (1 << n) - 1 };
+            // SAFETY: AVX-512 F was checked; every index is a record.
+            let fields = unsafe {
+                let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr() as *const i32);
+                load_records(recs.as_ptr(), ids.as_ptr(), lm, idx)
+            };
+            for (k, f) in fields.iter().enumerate() {
+                let mut lanes = [0f32; 16];
+                // SAFETY: sixteen floats.
+                unsafe { _mm512_storeu_ps(lanes.as_mut_ptr(), *f) };
+                for j in 0..16 {
+                    // Lanes outside the step read ray 0's record.
+                    let ray = if j < n { ids[j] as usize } else { 0 };
+                    assert_eq!(lanes[j], value(ray, k), "n {n}, field {k}, lane {j}");
+                }
+            }
         }
     }
 }
