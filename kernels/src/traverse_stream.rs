@@ -660,16 +660,14 @@ mod avx512 {
                         scale,
                     );
                     let hit = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(lm, near, far);
-                    if hit != 0 {
-                        // Packed in a register and stored whole: a compress to memory is
-                        // microcoded on Zen 4; the region has room for the sixteen lanes.
-                        let dst = base.add(top + k * stride + cnt[k]);
-                        _mm512_storeu_si512(
-                            dst as *mut __m512i,
-                            _mm512_maskz_compress_epi32(hit, idx),
-                        );
-                        cnt[k] += hit.count_ones() as usize;
-                    }
+                    // Packed in a register and stored whole: a compress to memory is
+                    // microcoded on Zen 4; the region has room for the sixteen lanes.
+                    // Stored even where no lane enters: that costs less than the branch,
+                    // which mispredicts (the `stream_traversal` example: 0.85-0.97x of the time per ray
+                    // with the branch, alternated runs).
+                    let dst = base.add(top + k * stride + cnt[k]);
+                    _mm512_storeu_si512(dst as *mut __m512i, _mm512_maskz_compress_epi32(hit, idx));
+                    cnt[k] += hit.count_ones() as usize;
                 }
                 c += 16;
             }
