@@ -331,21 +331,11 @@ mod avx512 {
         let mut c = 0;
         while c < n {
             let lm = lanes(n - c);
-            let four = _mm512_slli_epi32::<2>(_mm512_maskz_loadu_epi32(
-                lm,
-                slots.as_ptr().add(c) as *const i32,
-            ));
-            let get = |v: &[glam::Vec4], k: i32| {
-                let idx = _mm512_add_epi32(four, _mm512_set1_epi32(k));
-                _mm512_mask_i32gather_ps::<4>(zero, lm, idx, v.as_ptr() as *const f32)
-            };
-            let (ox, oy, oz, ow) = (
-                get(src.org, 0),
-                get(src.org, 1),
-                get(src.org, 2),
-                get(src.org, 3),
-            );
-            let (dx, dy, dz) = (get(src.dir, 0), get(src.dir, 1), get(src.dir, 2));
+            let ids = _mm512_maskz_loadu_epi32(lm, slots.as_ptr().add(c) as *const i32);
+            let four = _mm512_slli_epi32::<2>(ids);
+            let at = slots.as_ptr().add(c);
+            let [ox, oy, oz, ow] = load_vec4s(src.org, at, lm, ids);
+            let [dx, dy, dz, dw] = load_vec4s(src.dir, at, lm, ids);
             let (ax, ay, az) = (_mm512_abs_ps(dx), _mm512_abs_ps(dy), _mm512_abs_ps(dz));
             let k0 =
                 _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, ay) & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, az);
@@ -387,14 +377,12 @@ mod avx512 {
                     _mm512_test_epi32_mask(w, _mm512_set1_epi32(DONE as i32))
                 }
                 Skip::Unlit(nee) => {
-                    let idle = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(
-                        get(src.dir, 3),
-                        _mm512_set1_ps(SLOT_IDLE),
-                    );
+                    let idle = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(dw, _mm512_set1_ps(SLOT_IDLE));
+                    let [lx, ly, lz, _] = load_vec4s(nee, at, lm, ids);
                     // `ld != Vec3::ZERO`: some component unequal to zero (NaN included).
-                    let lit = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 0), zero)
-                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 1), zero)
-                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(get(nee, 2), zero);
+                    let lit = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(lx, zero)
+                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(ly, zero)
+                        | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(lz, zero);
                     idle | !lit
                 }
                 Skip::None => 0,
@@ -476,6 +464,23 @@ mod avx512 {
         ]
     }
 
+    /// The sixteen indices a step reads: `ids` where `lm` is full, else `idx`'s lanes
+    /// (zero outside `lm`, so that no lane reads past the arrays) through `part`.
+    #[target_feature(enable = "avx512f")]
+    unsafe fn step_ids(
+        ids: *const u32,
+        lm: __mmask16,
+        idx: __m512i,
+        part: &mut [u32; 16],
+    ) -> *const u32 {
+        if lm == 0xffff {
+            ids
+        } else {
+            _mm512_storeu_si512(part.as_mut_ptr() as *mut __m512i, idx);
+            part.as_ptr()
+        }
+    }
+
     /// The eight fields of the records of sixteen rays, field `k` in output `k`, ray `j`
     /// in lane `j`: the rays at `ids` (sixteen indices) where `lm` is full, else those of
     /// `idx` (zero in the lanes outside `lm`, which read ray 0's record).
@@ -490,12 +495,7 @@ mod avx512 {
         idx: __m512i,
     ) -> [__m512; 8] {
         let mut part = [0u32; 16];
-        let ids = if lm == 0xffff {
-            ids
-        } else {
-            _mm512_storeu_si512(part.as_mut_ptr() as *mut __m512i, idx);
-            part.as_ptr()
-        };
+        let ids = step_ids(ids, lm, idx, &mut part);
         let rec = |j: usize| _mm256_loadu_ps(recs.add(*ids.add(j) as usize) as *const f32);
         // Rays j and j + 4 (j < 4), then j + 4 and j + 8 (4 <= j < 8), so that the
         // transpose's lanes come out in ray order.
@@ -536,6 +536,64 @@ mod avx512 {
                 _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(both))),
             );
         }
+    }
+
+    /// The x, y, z and w of the `Vec4`s of sixteen slots, ray `j` in lane `j`: the slots
+    /// at `ids` where `lm` is full, else those of `idx` (zero outside `lm`: slot 0's, which
+    /// then exists). Sixteen 16-byte loads and a 4x4 transpose in each 128-bit lane, or,
+    /// where the sixteen slots are consecutive (a list in slot order), four 64-byte loads;
+    /// a gather per component fetches one element at a time.
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; every slot in `lm`'s lanes indexes `v`, and so does 0.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn load_vec4s(
+        v: &[glam::Vec4],
+        ids: *const u32,
+        lm: __mmask16,
+        idx: __m512i,
+    ) -> [__m512; 4] {
+        let p = v.as_ptr() as *const f32;
+        let row = |j: u32| _mm_loadu_ps(p.add(4 * j as usize));
+        let first = *ids;
+        let consecutive = lm == 0xffff && *ids.add(15) == first.wrapping_add(15);
+        let z: [__m512; 4] = if consecutive {
+            std::array::from_fn(|q| _mm512_loadu_ps(p.add(4 * (first as usize + 4 * q))))
+        } else {
+            let mut part = [0u32; 16];
+            let ids = step_ids(ids, lm, idx, &mut part);
+            // Register q holds slots q, q + 4, q + 8 and q + 12, so that the transpose's
+            // lanes come out in slot order.
+            std::array::from_fn(|q| {
+                let r = |k: usize| row(*ids.add(q + 4 * k));
+                let z = _mm512_castps128_ps512(r(0));
+                let z = _mm512_insertf32x4::<1>(z, r(1));
+                let z = _mm512_insertf32x4::<2>(z, r(2));
+                _mm512_insertf32x4::<3>(z, r(3))
+            })
+        };
+        let t = [
+            _mm512_unpacklo_ps(z[0], z[1]),
+            _mm512_unpackhi_ps(z[0], z[1]),
+            _mm512_unpacklo_ps(z[2], z[3]),
+            _mm512_unpackhi_ps(z[2], z[3]),
+        ];
+        let pd = _mm512_castps_pd;
+        let mut out = [
+            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[0]), pd(t[2]))),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[0]), pd(t[2]))),
+            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[1]), pd(t[3]))),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[1]), pd(t[3]))),
+        ];
+        if consecutive {
+            // Consecutive rows came out with lane 4k + q holding slot 4q + k: transposed
+            // back (the permutation is its own inverse).
+            let order = _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15);
+            for o in &mut out {
+                *o = _mm512_permutexvar_ps(order, *o);
+            }
+        }
+        out
     }
 
     /// Slot `s`'s box of the node (`a` holds slots 0..4, `b` 4..8): lo and hi per axis.
@@ -816,7 +874,7 @@ mod avx512 {
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
-    use super::avx512::{load_records, store_records};
+    use super::avx512::{load_records, load_vec4s, store_records};
     use std::arch::x86_64::*;
 
     /// Records stored from sixteen rays' fields read back, in any order of rays, as the
@@ -857,6 +915,36 @@ mod tests {
                     // Lanes outside the step read ray 0's record.
                     let ray = if j < n { ids[j] as usize } else { 0 };
                     assert_eq!(lanes[j], value(ray, k), "n {n}, field {k}, lane {j}");
+                }
+            }
+        }
+    }
+
+    /// Slots' `Vec4`s read as components, lane by lane: scattered slots, consecutive
+    /// ones (the four-load path) and a step of fewer than sixteen.
+    #[test]
+    fn vec4s_of_slots_load_as_components() {
+        if !super::supported() {
+            return;
+        }
+        let v: Vec<glam::Vec4> = (0..64)
+            .map(|i| glam::Vec4::new(i as f32, i as f32 + 0.25, i as f32 + 0.5, -(i as f32)))
+            .collect();
+        let scattered: [u32; 16] = [63, 0, 7, 16, 3, 30, 9, 12, 1, 22, 5, 27, 18, 2, 11, 25];
+        let consecutive: [u32; 16] = std::array::from_fn(|j| 40 + j as u32);
+        for (ids, n) in [(scattered, 16usize), (consecutive, 16), (consecutive, 9)] {
+            let lm: __mmask16 = if n == 16 { 0xffff } else { (1 << n) - 1 };
+            // SAFETY: AVX-512 F was checked; every slot indexes `v`.
+            let comps = unsafe {
+                let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr() as *const i32);
+                load_vec4s(&v, ids.as_ptr(), lm, idx)
+            };
+            for (k, c) in comps.iter().enumerate() {
+                let mut lanes = [0f32; 16];
+                // SAFETY: sixteen floats.
+                unsafe { _mm512_storeu_ps(lanes.as_mut_ptr(), *c) };
+                for (j, &got) in lanes.iter().enumerate().take(n) {
+                    assert_eq!(got, v[ids[j] as usize][k], "n {n}, component {k}, lane {j}");
                 }
             }
         }
