@@ -25,10 +25,9 @@
 //! [`trace_shadow8`]: crate::traverse_wide::trace_shadow8
 
 use crate::layout::{Frame, Triangle, DONE, MISS, SLOT_IDLE};
-use crate::shadow::finish_slot;
 use crate::traverse_wide::WideNode;
 use cohort::runtime::cpu::LaneArgs;
-use glam::{UVec4, Vec3, Vec4};
+use glam::{UVec4, Vec4};
 
 /// Rays per stream at the least when a dispatch is split over the cores: shorter lists
 /// leave the sixteen lanes of a step mostly empty deep in the tree (measured 0.70x of
@@ -71,10 +70,12 @@ pub fn traverse8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
         live: f.has_geometry != 0,
         skip: Skip::Done(state),
     };
-    trace_slots(&idrays[..n], false, &rays, nodes, tris, |s, h| {
-        if state[s as usize].w & DONE == 0 {
-            // SAFETY: each slot appears once in the list, so each write is its own.
-            unsafe { *hits.at(s as usize) = h };
+    trace_slots(&idrays[..n], false, &rays, nodes, tris, |r, part| {
+        for (i, &s) in part.iter().enumerate() {
+            if state[s as usize].w & DONE == 0 {
+                // SAFETY: each slot appears once in the list, so each write is its own.
+                unsafe { *hits.at(s as usize) = r.hit(i) };
+            }
         }
     });
     true
@@ -105,18 +106,6 @@ pub fn trace_shadow8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
         )
     };
     let n = (count[0] as u64).min(invocations) as usize;
-    let finish = |r: u32, visible: bool| {
-        let d = shadow_d[r as usize];
-        // SAFETY: each slot appears once in the list, so each slot's two elements are
-        // written by one thread, through slices of that one element.
-        let (rad, acc) = unsafe {
-            (
-                &mut *std::ptr::slice_from_raw_parts_mut(radiance.at(r as usize), 1),
-                &mut *std::ptr::slice_from_raw_parts_mut(accum.at(r as usize), 1),
-            )
-        };
-        finish_slot(0, d.w, nee[r as usize].truncate(), visible, rad, acc);
-    };
     let rays = RaySource {
         org: shadow_o,
         dir: shadow_d,
@@ -124,11 +113,14 @@ pub fn trace_shadow8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
         live: f.has_geometry != 0,
         skip: Skip::Unlit(nee),
     };
-    trace_slots(&idrays[..n], true, &rays, nodes, tris, |r, h| {
-        if shadow_d[r as usize].w != SLOT_IDLE {
-            let lit = nee[r as usize].truncate() != Vec3::ZERO;
-            finish(r, lit && h.w.to_bits() == MISS);
-        }
+    let out = (radiance, accum);
+    trace_slots(&idrays[..n], true, &rays, nodes, tris, |r, part| {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `supported()` checked AVX-512 F; the slots index the buffers, and each
+        // slot appears once in the list, so each slot's elements are written by one thread.
+        unsafe {
+            avx512::finish_shadows(r, part, shadow_d, nee, out.0.at(0), out.1.at(0))
+        };
     });
     true
 }
@@ -213,15 +205,15 @@ enum Skip<'a> {
     None,
 }
 
-/// Traces the rays of `slots` in streams spread over the cores and hands each slot's
-/// result, as `trace8` returns it, to `done`.
+/// Traces the rays of `slots` in streams spread over the cores and hands each stream's
+/// rays, with its slots (ray `i` is slot `part[i]`'s), to `done`.
 fn trace_slots(
     slots: &[u32],
     any: bool,
     src: &RaySource<'_>,
     nodes: &[WideNode],
     tris: &[Triangle],
-    done: impl Fn(u32, Vec4) + Sync,
+    done: impl Fn(&Rays, &[u32]) + Sync,
 ) {
     use rayon::prelude::*;
     if slots.is_empty() {
@@ -238,9 +230,7 @@ fn trace_slots(
                 avx512::setup(&mut st.rays, src, part);
                 avx512::trace(&mut st.rays, nodes, tris, any, &mut st.arena, part.len())
             };
-            for (i, &s) in part.iter().enumerate() {
-                done(s, st.rays.hit(i));
-            }
+            done(&st.rays, part);
         })
     });
 }
@@ -310,6 +300,7 @@ impl Rays {
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::{field, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, SLOT_IDLE};
+    use crate::layout::SLOT_ENDED;
 
     /// A child slot of a node with fewer than eight children (`cohort_scenes`'
     /// `bvh::wide::EMPTY_SLOT`, whose box no ray enters).
@@ -334,8 +325,8 @@ mod avx512 {
             let ids = _mm512_maskz_loadu_epi32(lm, slots.as_ptr().add(c) as *const i32);
             let four = _mm512_slli_epi32::<2>(ids);
             let at = slots.as_ptr().add(c);
-            let [ox, oy, oz, ow] = load_vec4s(src.org, at, lm, ids);
-            let [dx, dy, dz, dw] = load_vec4s(src.dir, at, lm, ids);
+            let [ox, oy, oz, ow] = load_vec4s(src.org.as_ptr(), at, lm, ids);
+            let [dx, dy, dz, dw] = load_vec4s(src.dir.as_ptr(), at, lm, ids);
             let (ax, ay, az) = (_mm512_abs_ps(dx), _mm512_abs_ps(dy), _mm512_abs_ps(dz));
             let k0 =
                 _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, ay) & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(ax, az);
@@ -378,7 +369,7 @@ mod avx512 {
                 }
                 Skip::Unlit(nee) => {
                     let idle = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(dw, _mm512_set1_ps(SLOT_IDLE));
-                    let [lx, ly, lz, _] = load_vec4s(nee, at, lm, ids);
+                    let [lx, ly, lz, _] = load_vec4s(nee.as_ptr(), at, lm, ids);
                     // `ld != Vec3::ZERO`: some component unequal to zero (NaN included).
                     let lit = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(lx, zero)
                         | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(ly, zero)
@@ -548,12 +539,12 @@ mod avx512 {
     /// Needs AVX-512 F; every slot in `lm`'s lanes indexes `v`, and so does 0.
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn load_vec4s(
-        v: &[glam::Vec4],
+        v: *const glam::Vec4,
         ids: *const u32,
         lm: __mmask16,
         idx: __m512i,
     ) -> [__m512; 4] {
-        let p = v.as_ptr() as *const f32;
+        let p = v as *const f32;
         let row = |j: u32| _mm_loadu_ps(p.add(4 * j as usize));
         let first = *ids;
         let consecutive = lm == 0xffff && *ids.add(15) == first.wrapping_add(15);
@@ -572,19 +563,7 @@ mod avx512 {
                 _mm512_insertf32x4::<3>(z, r(3))
             })
         };
-        let t = [
-            _mm512_unpacklo_ps(z[0], z[1]),
-            _mm512_unpackhi_ps(z[0], z[1]),
-            _mm512_unpacklo_ps(z[2], z[3]),
-            _mm512_unpackhi_ps(z[2], z[3]),
-        ];
-        let pd = _mm512_castps_pd;
-        let mut out = [
-            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[0]), pd(t[2]))),
-            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[0]), pd(t[2]))),
-            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[1]), pd(t[3]))),
-            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[1]), pd(t[3]))),
-        ];
+        let mut out = transpose4(z);
         if consecutive {
             // Consecutive rows came out with lane 4k + q holding slot 4q + k: transposed
             // back (the permutation is its own inverse).
@@ -594,6 +573,121 @@ mod avx512 {
             }
         }
         out
+    }
+
+    /// `trace_shadow8`'s end of each slot of `part` (ray `i` is slot `part[i]`'s), sixteen
+    /// at a time: a slot whose shadow direction's w is not `SLOT_IDLE` is finished as
+    /// `shadow::finish_slot` does, with the light sample visible where it is lit (`nee`'s
+    /// xyz not zero) and its ray missed, the same operations on each lane. (A loop over the
+    /// slots branched on three random conditions per slot: about a tenth of a cornell-box
+    /// render's time.)
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; the slots index the four arrays, which hold at least one element,
+    /// and no other thread writes `part`'s slots.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn finish_shadows(
+        r: &Rays,
+        part: &[u32],
+        shadow_d: &[glam::Vec4],
+        nee: &[glam::Vec4],
+        radiance: *mut glam::Vec4,
+        accum: *mut glam::Vec4,
+    ) {
+        let zero = _mm512_setzero_ps();
+        let n = part.len();
+        let mut c = 0;
+        while c < n {
+            let lm = lanes(n - c);
+            let at = part.as_ptr().add(c);
+            let idx = _mm512_maskz_loadu_epi32(lm, at as *const i32);
+            let [_, _, _, status] = load_vec4s(shadow_d.as_ptr(), at, lm, idx);
+            let [lx, ly, lz, _] = load_vec4s(nee.as_ptr(), at, lm, idx);
+            let [rx, ry, rz, rw] = load_vec4s(radiance, at, lm, idx);
+            let miss = _mm512_cmpeq_epi32_mask(
+                _mm512_loadu_si512(r.tri.as_ptr().add(c) as *const __m512i),
+                _mm512_set1_epi32(MISS as i32),
+            );
+            let active = lm & _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(status, _mm512_set1_ps(SLOT_IDLE));
+            // `ld != Vec3::ZERO`: some component unequal to zero (NaN included).
+            let lit = _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(lx, zero)
+                | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(ly, zero)
+                | _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(lz, zero);
+            let visible = lit & miss;
+            let l = [
+                _mm512_mask_add_ps(rx, visible, rx, lx),
+                _mm512_mask_add_ps(ry, visible, ry, ly),
+                _mm512_mask_add_ps(rz, visible, rz, lz),
+            ];
+            let ended =
+                active & _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(status, _mm512_set1_ps(SLOT_ENDED));
+            let kept = active & !ended;
+            if ended != 0 {
+                let [ax, ay, az, aw] = load_vec4s(accum, at, lm, idx);
+                store_vec4s(
+                    accum,
+                    at,
+                    ended,
+                    [
+                        _mm512_add_ps(ax, l[0]),
+                        _mm512_add_ps(ay, l[1]),
+                        _mm512_add_ps(az, l[2]),
+                        _mm512_add_ps(aw, _mm512_set1_ps(1.0)),
+                    ],
+                );
+                store_vec4s(radiance, at, ended, [zero; 4]);
+            }
+            store_vec4s(radiance, at, kept, [l[0], l[1], l[2], rw]);
+            c += 16;
+        }
+    }
+
+    /// Stores the `Vec4` with components lane `j` of `comps` at `v[ids[j]]`, for the lanes
+    /// of `mask`: the transpose of [`load_vec4s`]'s general path.
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; the slots of `mask`'s lanes index `v`.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn store_vec4s(
+        v: *mut glam::Vec4,
+        ids: *const u32,
+        mask: __mmask16,
+        comps: [__m512; 4],
+    ) {
+        if mask == 0 {
+            return;
+        }
+        // Register q's 128-bit lane k is slot 4k + q's Vec4.
+        let rows = transpose4(comps);
+        let mut buf = [0f32; 64];
+        for (q, row) in rows.iter().enumerate() {
+            _mm512_storeu_ps(buf.as_mut_ptr().add(16 * q), *row);
+        }
+        for j in 0..16 {
+            if mask & (1 << j) != 0 {
+                let from = buf.as_ptr().add(16 * (j % 4) + 4 * (j / 4));
+                _mm_storeu_ps(v.add(*ids.add(j) as usize) as *mut f32, _mm_loadu_ps(from));
+            }
+        }
+    }
+
+    /// The 4x4 transposes of four registers' 128-bit lanes: lane k of output e holds
+    /// element e of lane k of inputs 0 to 3 (its own inverse).
+    #[target_feature(enable = "avx512f")]
+    unsafe fn transpose4(z: [__m512; 4]) -> [__m512; 4] {
+        let t = [
+            _mm512_unpacklo_ps(z[0], z[1]),
+            _mm512_unpackhi_ps(z[0], z[1]),
+            _mm512_unpacklo_ps(z[2], z[3]),
+            _mm512_unpackhi_ps(z[2], z[3]),
+        ];
+        let pd = _mm512_castps_pd;
+        [
+            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[0]), pd(t[2]))),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[0]), pd(t[2]))),
+            _mm512_castpd_ps(_mm512_unpacklo_pd(pd(t[1]), pd(t[3]))),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(pd(t[1]), pd(t[3]))),
+        ]
     }
 
     /// Slot `s`'s box of the node (`a` holds slots 0..4, `b` 4..8): lo and hi per axis.
@@ -874,7 +968,7 @@ mod avx512 {
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
-    use super::avx512::{load_records, load_vec4s, store_records};
+    use super::avx512::{load_records, load_vec4s, store_records, store_vec4s};
     use std::arch::x86_64::*;
 
     /// Records stored from sixteen rays' fields read back, in any order of rays, as the
@@ -937,7 +1031,7 @@ mod tests {
             // SAFETY: AVX-512 F was checked; every slot indexes `v`.
             let comps = unsafe {
                 let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr() as *const i32);
-                load_vec4s(&v, ids.as_ptr(), lm, idx)
+                load_vec4s(v.as_ptr(), ids.as_ptr(), lm, idx)
             };
             for (k, c) in comps.iter().enumerate() {
                 let mut lanes = [0f32; 16];
@@ -946,6 +1040,20 @@ mod tests {
                 for (j, &got) in lanes.iter().enumerate().take(n) {
                     assert_eq!(got, v[ids[j] as usize][k], "n {n}, component {k}, lane {j}");
                 }
+            }
+            // Stored back into a zeroed copy under a mask of every other lane: those slots
+            // get their Vec4s, the rest stay zero.
+            let mut back = vec![glam::Vec4::ZERO; v.len()];
+            let mask: __mmask16 = 0x5555 & lm;
+            // SAFETY: AVX-512 F was checked; every slot indexes `back`.
+            unsafe { store_vec4s(back.as_mut_ptr(), ids.as_ptr(), mask, comps) };
+            for (j, &slot) in ids.iter().enumerate() {
+                let want = if mask & (1 << j) != 0 {
+                    v[slot as usize]
+                } else {
+                    glam::Vec4::ZERO
+                };
+                assert_eq!(back[slot as usize], want, "n {n}, stored lane {j}");
             }
         }
     }
