@@ -71,12 +71,12 @@ pub fn traverse8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
         skip: Skip::Done(state),
     };
     trace_slots(&idrays[..n], false, &rays, nodes, tris, |r, part| {
-        for (i, &s) in part.iter().enumerate() {
-            if state[s as usize].w & DONE == 0 {
-                // SAFETY: each slot appears once in the list, so each write is its own.
-                unsafe { *hits.at(s as usize) = r.hit(i) };
-            }
-        }
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `supported()` checked AVX-512 F; the slots index the buffers, and each
+        // slot appears once in the list, so each write is its own.
+        unsafe {
+            avx512::write_hits(r, part, state, hits.at(0))
+        };
     });
     true
 }
@@ -573,6 +573,51 @@ mod avx512 {
             }
         }
         out
+    }
+
+    /// `traverse8`'s result of each ray of `part` (ray `i` is slot `part[i]`'s) into
+    /// `hits`, as [`Rays::hit`] gives it, except where the slot's path is done (the
+    /// invocation returns before writing), sixteen at a time.
+    ///
+    /// # Safety
+    /// Needs AVX-512 F; the slots index `state` and `hits`, and no other thread writes
+    /// `part`'s slots.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn write_hits(
+        r: &Rays,
+        part: &[u32],
+        state: &[glam::UVec4],
+        hits: *mut glam::Vec4,
+    ) {
+        let zero = _mm512_setzero_ps();
+        let n = part.len();
+        let recs = r.boxr.as_ptr() as *const f32;
+        let mut c = 0;
+        while c < n {
+            let lm = lanes(n - c);
+            let at = part.as_ptr().add(c);
+            let idx = _mm512_maskz_loadu_epi32(lm, at as *const i32);
+            let [_, _, _, w] = load_vec4s(state.as_ptr() as *const glam::Vec4, at, lm, idx);
+            let done =
+                _mm512_test_epi32_mask(_mm512_castps_si512(w), _mm512_set1_epi32(DONE as i32));
+            // Rays c.. are consecutive records: t and tmax eight floats apart.
+            let rec = _mm512_slli_epi32::<3>(_mm512_add_epi32(
+                _mm512_set1_epi32(c as i32),
+                _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+            ));
+            let t = _mm512_i32gather_ps::<4>(rec, recs.add(field::T));
+            let tmax = _mm512_i32gather_ps::<4>(rec, recs.add(field::TMAX));
+            let tri = _mm512_loadu_si512(r.tri.as_ptr().add(c) as *const __m512i);
+            let miss = _mm512_cmpeq_epi32_mask(tri, _mm512_set1_epi32(MISS as i32));
+            let hit = [
+                _mm512_mask_blend_ps(miss, t, tmax),
+                _mm512_mask_blend_ps(miss, _mm512_loadu_ps(r.u.as_ptr().add(c)), zero),
+                _mm512_mask_blend_ps(miss, _mm512_loadu_ps(r.v.as_ptr().add(c)), zero),
+                _mm512_castsi512_ps(tri),
+            ];
+            store_vec4s(hits, at, lm & !done, hit);
+            c += 16;
+        }
     }
 
     /// `trace_shadow8`'s end of each slot of `part` (ray `i` is slot `part[i]`'s), sixteen
