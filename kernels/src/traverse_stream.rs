@@ -29,10 +29,12 @@ use crate::traverse_wide::WideNode;
 use cohort::runtime::cpu::LaneArgs;
 use glam::{UVec4, Vec4};
 
-/// Rays per stream at the least when a dispatch is split over the cores: shorter lists
-/// leave the sixteen lanes of a step mostly empty deep in the tree (measured 0.70x of
-/// `trace8`'s time per ray with streams of 4096 rays, 0.33x with 65536).
-const MIN_STREAM: usize = 8192;
+/// Rays per stream at the least when a dispatch is split over the cores. Shorter streams
+/// leave more of a step's sixteen lanes empty deep in the tree (0.51x of `trace8`'s time
+/// per ray with 4096 rays, 0.27x with 65536), but a core left idle costs more: with 8192
+/// here, the last hundred iterations of a 256x256 render (fewer than 8192 live paths)
+/// traced on one core, and 1024 took 0.94-0.98x of the traversals' time.
+const MIN_STREAM: usize = 1024;
 
 /// Rays per stream at the most: a stream's lists take up to eight times its length per
 /// level of the tree, so a dispatch of a large image's slots is traced as several
