@@ -927,8 +927,11 @@ mod avx512 {
             // The hit so far; only the lanes a triangle hits here are written back, so u, v
             // and the triangle need not be read.
             let mut bt = _mm512_mask_i32gather_ps::<4>(zero, lm, rec, t_at);
-            let mut bu = zero;
+            // The closest hit's v, w and det: its u and v are divided out once, after the
+            // leaf (the same divisions, of the same values).
             let mut bv = zero;
+            let mut bw = zero;
+            let mut bdet = _mm512_set1_ps(1.0);
             let mut btri = izero;
             let mut changed: __mmask16 = 0;
             // `rotate(v, kz)` per lane, less the ray's rotated origin: kz 0 -> (y, z, x),
@@ -985,15 +988,17 @@ mod avx512 {
                 let hit = ok
                     & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(tt, tmin)
                     & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(tt, bt);
-                if hit != 0 {
-                    bt = _mm512_mask_blend_ps(hit, bt, tt);
-                    bu = _mm512_mask_blend_ps(hit, bu, _mm512_div_ps(v, det));
-                    bv = _mm512_mask_blend_ps(hit, bv, _mm512_div_ps(w, det));
-                    btri = _mm512_mask_blend_epi32(hit, btri, _mm512_set1_epi32(k as i32));
-                    changed |= hit;
-                }
+                // Blended without a branch on `hit`, which mispredicts.
+                bt = _mm512_mask_blend_ps(hit, bt, tt);
+                bv = _mm512_mask_blend_ps(hit, bv, v);
+                bw = _mm512_mask_blend_ps(hit, bw, w);
+                bdet = _mm512_mask_blend_ps(hit, bdet, det);
+                btri = _mm512_mask_blend_epi32(hit, btri, _mm512_set1_epi32(k as i32));
+                changed |= hit;
             }
             if changed != 0 {
+                let bu = _mm512_div_ps(bv, bdet);
+                let bv = _mm512_div_ps(bw, bdet);
                 if any {
                     // Only whether it hit is wanted (`trace_shadow8`): its t ends the traversal.
                     bt = _mm512_mask_blend_ps(changed, bt, _mm512_set1_ps(-1.0));
