@@ -255,9 +255,11 @@ thread_local! {
 /// reads it as its tmax), u, v and the triangle.
 #[derive(Default)]
 struct Rays {
-    /// [`BOX`]'s fields per ray.
+    /// The box test's record per ray: origin, inverse direction, the closest t so far and
+    /// tmax (the indices of [`field`]).
     boxr: Vec<[f32; 8]>,
-    /// [`TRI`]'s fields per ray.
+    /// The triangle test's record per ray, as `traverse::intersect` sets a ray up: the
+    /// rotated origin, the shear, tmin, and the dominant axis (an i32's bits).
     trir: Vec<[f32; 8]>,
     u: Vec<f32>,
     v: Vec<f32>,
@@ -549,7 +551,13 @@ mod avx512 {
         let p = v as *const f32;
         let row = |j: u32| _mm_loadu_ps(p.add(4 * j as usize));
         let first = *ids;
-        let consecutive = lm == 0xffff && *ids.add(15) == first.wrapping_add(15);
+        // Every lane's slot is the first's plus the lane (a list need not be sorted).
+        let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let consecutive = lm == 0xffff
+            && _mm512_cmpeq_epi32_mask(
+                idx,
+                _mm512_add_epi32(_mm512_set1_epi32(first as i32), iota),
+            ) == 0xffff;
         let z: [__m512; 4] = if consecutive {
             std::array::from_fn(|q| _mm512_loadu_ps(p.add(4 * (first as usize + 4 * q))))
         } else {
@@ -1067,7 +1075,8 @@ mod tests {
     }
 
     /// Slots' `Vec4`s read as components, lane by lane: scattered slots, consecutive
-    /// ones (the four-load path) and a step of fewer than sixteen.
+    /// ones (the four-load path), a step of fewer than sixteen, and slots whose first and
+    /// last are fifteen apart out of order.
     #[test]
     fn vec4s_of_slots_load_as_components() {
         if !super::supported() {
@@ -1078,7 +1087,15 @@ mod tests {
             .collect();
         let scattered: [u32; 16] = [63, 0, 7, 16, 3, 30, 9, 12, 1, 22, 5, 27, 18, 2, 11, 25];
         let consecutive: [u32; 16] = std::array::from_fn(|j| 40 + j as u32);
-        for (ids, n) in [(scattered, 16usize), (consecutive, 16), (consecutive, 9)] {
+        // First and last slots fifteen apart, but not in order (a list need not be sorted).
+        let mut shuffled = consecutive;
+        shuffled.swap(3, 9);
+        for (ids, n) in [
+            (scattered, 16usize),
+            (consecutive, 16),
+            (consecutive, 9),
+            (shuffled, 16),
+        ] {
             let lm: __mmask16 = if n == 16 { 0xffff } else { (1 << n) - 1 };
             // SAFETY: AVX-512 F was checked; every slot indexes `v`.
             let comps = unsafe {
