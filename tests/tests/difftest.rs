@@ -600,6 +600,81 @@ fn transcendental_math() {
     }
 }
 
+/// `sin` and `cos` on the CPU backend's forms, bit for bit against the host run (NaNs: both
+/// NaN): the edges
+/// of the ranges where the vector form computes them itself (|x| < 2^-12, < 0.75, < 120) and
+/// where it calls the C library (|x| >= 120, infinities, NaN), quadrant boundaries, and
+/// random bit patterns. The GPUs' sines are bounded by `transcendental_math`.
+#[test]
+fn sines_match_the_host_exactly() {
+    use cohort_tests::kernels::mathfns::*;
+    let mut xs = vec![
+        0.0f32,
+        f32::MIN_POSITIVE,
+        1.0e-40,
+        f32::INFINITY,
+        f32::NAN,
+        f32::MAX,
+        1.0e30,
+        1.0e6,
+        120.0,
+        0.75,
+        2.0f32.powi(-12),
+    ];
+    for x in xs.clone() {
+        xs.extend([
+            f32::from_bits(x.to_bits().wrapping_sub(1)),
+            f32::from_bits(x.to_bits() + 1),
+        ]);
+    }
+    for k in 0..80 {
+        let q = k as f32 * std::f32::consts::FRAC_PI_2;
+        xs.extend((0..7).map(|d| f32::from_bits((q.to_bits() + d).wrapping_sub(3))));
+    }
+    let mut rng = Rng(7);
+    xs.extend((0..2000).map(|_| f32::from_bits(rng.next_u32())));
+    xs.extend((0..2000).map(|_| rng.f32(-130.0, 130.0)));
+    xs.extend(xs.clone().iter().map(|x| -x));
+    xs.push(1.5);
+    let devs = devices();
+    let outs: Vec<Vec<u32>> = devs
+        .iter()
+        .map(|d| {
+            let x = d.upload(&xs).unwrap();
+            let o = d.alloc::<Vec4>(xs.len()).unwrap();
+            sines::launch(d, xs.len() as u32, &x, &o).unwrap();
+            flatten_vec4(&d.read(&o).unwrap())
+                .iter()
+                .map(|v| v.to_bits())
+                .collect()
+        })
+        .collect();
+    let mut host = vec![Vec4::ZERO; xs.len()];
+    for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| {
+        sines(inv.global_index, &xs, &mut host)
+    });
+    let host: Vec<u32> = flatten_vec4(&host).iter().map(|v| v.to_bits()).collect();
+    // NaNs compare as both NaN: their sign and payload are not specified (LANGUAGE.md
+    // section 4), and the vector forms' differ from the C library's.
+    let nan = |b: u32| f32::from_bits(b).is_nan();
+    let mut cpus = 0;
+    for (d, o) in devs.iter().zip(&outs) {
+        if is_cpu(d) {
+            cpus += 1;
+            for (k, (&a, &b)) in o.iter().zip(&host).enumerate() {
+                assert!(
+                    a == b || (nan(a) && nan(b)),
+                    "output {} of {:e} ({:#x}) on a CPU form: {a:#x}, host {b:#x}",
+                    k % 4,
+                    xs[k / 4],
+                    xs[k / 4].to_bits()
+                );
+            }
+        }
+    }
+    assert!(cpus >= 2, "the host form and at least one vector form");
+}
+
 #[test]
 fn vector_and_matrix_math() {
     use cohort_tests::kernels::vectors::*;

@@ -15,3 +15,17 @@ pub fn mathfns(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
     let d = x.atan2(1.5) + x.tanh() + x.max(0.25).min(2.0);
     out[i] = Vec4::new(a, b, c, d);
 }
+
+/// `sin` and `cos` alone and paired with each other: the CPU backend's vector form computes
+/// them in vector instructions below |x| = 120 and calls the C library beyond, and must give
+/// the host's bits either way.
+#[kernel(workgroup = 64)]
+pub fn sines(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
+    let i = gi as usize;
+    if i >= xs.len() {
+        return;
+    }
+    let x = xs[i];
+    let y = -x;
+    out[i] = Vec4::new(x.sin(), x.cos(), y.sin(), (x * 0.5).cos());
+}

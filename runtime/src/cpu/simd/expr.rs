@@ -82,7 +82,7 @@ impl Fx<'_> {
     }
 
     /// An LLVM intrinsic on `<W x float>`, e.g. `sqrt`.
-    fn fintr(&mut self, name: &str, xs: &[String]) -> String {
+    pub(super) fn fintr(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let args: Vec<(String, String)> = xs.iter().map(|x| (v.clone(), x.clone())).collect();
         self.call(&v, &format!("llvm.{name}.v{}f32", w()), &args)
@@ -159,7 +159,7 @@ impl Fx<'_> {
     }
 
     /// A libm function, called once per lane (the C function the host form calls).
-    fn libm(&mut self, name: &str, xs: &[String]) -> String {
+    pub(super) fn libm(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let mut acc = "poison".to_string();
         for lane in 0..w() {
@@ -710,6 +710,11 @@ impl Fx<'_> {
             Mf::Ceil if float => self.map(&args, n, st, intrinsic("ceil")),
             Mf::Trunc if float => self.map(&args, n, st, intrinsic("trunc")),
             Mf::Sqrt if float => self.map(&args, n, st, intrinsic("sqrt")),
+            Mf::Sin | Mf::Cos if float && super::sincos::libm_agrees() => {
+                self.map(&args, n, st, |fx, c| {
+                    Ok(fx.sin_or_cos(&c[0], fun == Mf::Cos))
+                })
+            }
             Mf::Sin if float => self.map(&args, n, st, per_lane("sin")),
             Mf::Cos if float => self.map(&args, n, st, per_lane("cos")),
             Mf::Exp if float => self.map(&args, n, st, per_lane("exp")),

@@ -14,6 +14,7 @@ mod lower;
 mod memory;
 mod perf_map;
 mod rows;
+mod sincos;
 mod straight;
 mod types;
 mod width;
