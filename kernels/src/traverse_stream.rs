@@ -77,7 +77,7 @@ pub fn traverse8_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
         // SAFETY: `supported()` checked AVX-512 F; the slots index the buffers, and each
         // slot appears once in the list, so each write is its own.
         unsafe {
-            avx512::write_hits(r, part, state, hits.at(0))
+            avx512::write_hits(r, part, hits.at(0))
         };
     });
     true
@@ -264,6 +264,9 @@ struct Rays {
     u: Vec<f32>,
     v: Vec<f32>,
     tri: Vec<u32>,
+    /// Per step of sixteen rays, the lanes the set-up found with no ray to trace
+    /// ([`Skip`]), so that a path ray's slot state is read once per dispatch.
+    skipped: Vec<u16>,
 }
 
 /// A box-test record's fields, by index: origin, inverse direction, the closest t so far,
@@ -282,6 +285,7 @@ impl Rays {
         self.u.resize(len, 0.0);
         self.v.resize(len, 0.0);
         self.tri.resize(len, MISS);
+        self.skipped.resize(len / 16, 0);
     }
 
     /// Ray `i`'s result as `trace8` returns it: (t, u, v, triangle as bits), or (tmax, 0,
@@ -382,6 +386,7 @@ mod avx512 {
                 }
                 Skip::None => 0,
             };
+            r.skipped[c / 16] = skip;
             let go = if src.live { 0xffff } else { 0 }
                 & !skip
                 & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(dot(dx, dy, dz), zero)
@@ -590,15 +595,10 @@ mod avx512 {
     /// invocation returns before writing), sixteen at a time.
     ///
     /// # Safety
-    /// Needs AVX-512 F; the slots index `state` and `hits`, and no other thread writes
-    /// `part`'s slots.
+    /// Needs AVX-512 F; `r` was set up from `part` with `Skip::Done`, the slots index
+    /// `hits`, and no other thread writes `part`'s slots.
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn write_hits(
-        r: &Rays,
-        part: &[u32],
-        state: &[glam::UVec4],
-        hits: *mut glam::Vec4,
-    ) {
+    pub(super) unsafe fn write_hits(r: &Rays, part: &[u32], hits: *mut glam::Vec4) {
         let zero = _mm512_setzero_ps();
         let n = part.len();
         let recs = r.boxr.as_ptr() as *const f32;
@@ -606,10 +606,8 @@ mod avx512 {
         while c < n {
             let lm = lanes(n - c);
             let at = part.as_ptr().add(c);
-            let idx = _mm512_maskz_loadu_epi32(lm, at as *const i32);
-            let [_, _, _, w] = load_vec4s(state.as_ptr() as *const glam::Vec4, at, lm, idx);
-            let done =
-                _mm512_test_epi32_mask(_mm512_castps_si512(w), _mm512_set1_epi32(DONE as i32));
+            // The slots whose path is done (`Skip::Done`, as the set-up found them).
+            let done = r.skipped[c / 16];
             // Rays c.. are consecutive records: t and tmax eight floats apart.
             let rec = _mm512_slli_epi32::<3>(_mm512_add_epi32(
                 _mm512_set1_epi32(c as i32),
@@ -698,10 +696,14 @@ mod avx512 {
     }
 
     /// Stores the `Vec4` with components lane `j` of `comps` at `v[ids[j]]`, for the lanes
-    /// of `mask`: the transpose of [`load_vec4s`]'s general path.
+    /// of `mask`: the transpose of [`load_vec4s`]. Where the masked lanes' slots are
+    /// consecutive (a live list before retirements, in slot order), as four masked 64-byte
+    /// stores; otherwise one 16-byte store per masked lane, the lanes taken from the mask's
+    /// set bits (a test of each of the sixteen bits mispredicted on `finish_shadows`' masks
+    /// of ended and continuing paths).
     ///
     /// # Safety
-    /// Needs AVX-512 F; the slots of `mask`'s lanes index `v`.
+    /// Needs AVX-512 F; the slots of `mask`'s lanes index `v` (`ids` is read only there).
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn store_vec4s(
         v: *mut glam::Vec4,
@@ -712,17 +714,41 @@ mod avx512 {
         if mask == 0 {
             return;
         }
+        let idx = _mm512_maskz_loadu_epi32(mask, ids as *const i32);
+        let j0 = mask.trailing_zeros();
+        // The slot lane 0 would have (it may be no slot when lane 0 is not stored).
+        let first = (*ids.add(j0 as usize)).wrapping_sub(j0);
+        let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let expect = _mm512_add_epi32(_mm512_set1_epi32(first as i32), iota);
+        if _mm512_mask_cmpeq_epi32_mask(mask, idx, expect) == mask {
+            // Lane 4a + b to 4b + a (its own inverse), then the transpose: register q
+            // holds the Vec4s of lanes 4q..4q + 4, in order.
+            let order = _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15);
+            let rows = transpose4(comps.map(|c| _mm512_permutexvar_ps(order, c)));
+            let out = v as *mut f32;
+            for (q, row) in rows.iter().enumerate() {
+                let lanes4 = (mask >> (4 * q)) & 0xf;
+                // Each lane's bit as its Vec4's four floats.
+                let floats = (0..4).fold(0u16, |m, b| m | (((lanes4 >> b) & 1) * 0xf) << (4 * b));
+                if floats != 0 {
+                    let at = out.wrapping_add(4 * (first as usize).wrapping_add(4 * q));
+                    _mm512_mask_storeu_ps(at, floats, *row);
+                }
+            }
+            return;
+        }
         // Register q's 128-bit lane k is slot 4k + q's Vec4.
         let rows = transpose4(comps);
         let mut buf = [0f32; 64];
         for (q, row) in rows.iter().enumerate() {
             _mm512_storeu_ps(buf.as_mut_ptr().add(16 * q), *row);
         }
-        for j in 0..16 {
-            if mask & (1 << j) != 0 {
-                let from = buf.as_ptr().add(16 * (j % 4) + 4 * (j / 4));
-                _mm_storeu_ps(v.add(*ids.add(j) as usize) as *mut f32, _mm_loadu_ps(from));
-            }
+        let mut m = mask;
+        while m != 0 {
+            let j = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let from = buf.as_ptr().add(16 * (j % 4) + 4 * (j / 4));
+            _mm_storeu_ps(v.add(*ids.add(j) as usize) as *mut f32, _mm_loadu_ps(from));
         }
     }
 
@@ -1110,19 +1136,22 @@ mod tests {
                     assert_eq!(got, v[ids[j] as usize][k], "n {n}, component {k}, lane {j}");
                 }
             }
-            // Stored back into a zeroed copy under a mask of every other lane: those slots
-            // get their Vec4s, the rest stay zero.
-            let mut back = vec![glam::Vec4::ZERO; v.len()];
-            let mask: __mmask16 = 0x5555 & lm;
-            // SAFETY: AVX-512 F was checked; every slot indexes `back`.
-            unsafe { store_vec4s(back.as_mut_ptr(), ids.as_ptr(), mask, comps) };
-            for (j, &slot) in ids.iter().enumerate() {
-                let want = if mask & (1 << j) != 0 {
-                    v[slot as usize]
-                } else {
-                    glam::Vec4::ZERO
-                };
-                assert_eq!(back[slot as usize], want, "n {n}, stored lane {j}");
+            // Stored back into a zeroed copy under masks of every lane, every other lane
+            // (lane 0 stored or not) and a run in the middle: those slots get their
+            // Vec4s, the rest stay zero.
+            for mask in [0xffff, 0x5555, 0xaaaa, 0x0ff0, 0x8001] {
+                let mask: __mmask16 = mask & lm;
+                let mut back = vec![glam::Vec4::ZERO; v.len()];
+                // SAFETY: AVX-512 F was checked; every slot indexes `back`.
+                unsafe { store_vec4s(back.as_mut_ptr(), ids.as_ptr(), mask, comps) };
+                for (j, &slot) in ids.iter().enumerate() {
+                    let want = if mask & (1 << j) != 0 {
+                        v[slot as usize]
+                    } else {
+                        glam::Vec4::ZERO
+                    };
+                    assert_eq!(back[slot as usize], want, "n {n}, mask {mask:#x}, lane {j}");
+                }
             }
         }
     }
