@@ -716,8 +716,9 @@ mod avx512 {
         }
         let idx = _mm512_maskz_loadu_epi32(mask, ids as *const i32);
         let j0 = mask.trailing_zeros();
-        // The slot lane 0 would have (it may be no slot when lane 0 is not stored).
-        let first = (*ids.add(j0 as usize)).wrapping_sub(j0);
+        // The slot lane 0 would have: where lane 0 is not stored it may be none, even
+        // negative (a list need not be sorted: lane 1 may hold slot 0).
+        let first = i64::from(*ids.add(j0 as usize)) - i64::from(j0);
         let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
         let expect = _mm512_add_epi32(_mm512_set1_epi32(first as i32), iota);
         if _mm512_mask_cmpeq_epi32_mask(mask, idx, expect) == mask {
@@ -731,7 +732,8 @@ mod avx512 {
                 // Each lane's bit as its Vec4's four floats.
                 let floats = (0..4).fold(0u16, |m, b| m | (((lanes4 >> b) & 1) * 0xf) << (4 * b));
                 if floats != 0 {
-                    let at = out.wrapping_add(4 * (first as usize).wrapping_add(4 * q));
+                    // Lanes outside the mask are not written, wherever they would point.
+                    let at = out.wrapping_offset(4 * (first as isize + 4 * q as isize));
                     _mm512_mask_storeu_ps(at, floats, *row);
                 }
             }
@@ -1116,11 +1118,15 @@ mod tests {
         // First and last slots fifteen apart, but not in order (a list need not be sorted).
         let mut shuffled = consecutive;
         shuffled.swap(3, 9);
+        // Lanes 1.. consecutive from slot 0, lane 0 elsewhere: stored without lane 0, the
+        // run starts at slot "-1".
+        let from_zero: [u32; 16] = std::array::from_fn(|j| if j == 0 { 50 } else { j as u32 - 1 });
         for (ids, n) in [
             (scattered, 16usize),
             (consecutive, 16),
             (consecutive, 9),
             (shuffled, 16),
+            (from_zero, 16),
         ] {
             let lm: __mmask16 = if n == 16 { 0xffff } else { (1 << n) - 1 };
             // SAFETY: AVX-512 F was checked; every slot indexes `v`.
