@@ -159,7 +159,7 @@ impl Fx<'_> {
     }
 
     /// A libm function, called once per lane (the C function the host form calls).
-    pub(super) fn libm(&mut self, name: &str, xs: &[String]) -> String {
+    fn libm(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let mut acc = "poison".to_string();
         for lane in 0..w() {
