@@ -82,7 +82,7 @@ impl Fx<'_> {
     }
 
     /// An LLVM intrinsic on `<W x float>`, e.g. `sqrt`.
-    pub(super) fn fintr(&mut self, name: &str, xs: &[String]) -> String {
+    fn fintr(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let args: Vec<(String, String)> = xs.iter().map(|x| (v.clone(), x.clone())).collect();
         self.call(&v, &format!("llvm.{name}.v{}f32", w()), &args)
