@@ -176,7 +176,9 @@ impl<T> Out<T> {
 fn supported() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
+        // (Every CPU with AVX-512 has `popcnt`, which counts a step's entering lanes.)
         std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("popcnt")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -255,12 +257,8 @@ thread_local! {
 /// reads it as its tmax), u, v and the triangle.
 #[derive(Default)]
 struct Rays {
-    /// The box test's record per ray: origin, inverse direction, the closest t so far and
-    /// tmax (the indices of [`field`]).
-    boxr: Vec<[f32; 8]>,
-    /// The triangle test's record per ray, as `traverse::intersect` sets a ray up: the
-    /// rotated origin, the shear, tmin, and the dominant axis (an i32's bits).
-    trir: Vec<[f32; 8]>,
+    /// Both records of each ray, in one cache line.
+    recs: Vec<RayRecords>,
     u: Vec<f32>,
     v: Vec<f32>,
     tri: Vec<u32>,
@@ -268,6 +266,25 @@ struct Rays {
     /// ([`Skip`]), so that a path ray's slot state is read once per dispatch.
     skipped: Vec<u16>,
 }
+
+/// A ray's two records side by side in one 64-byte line: a leaf reads the triangle
+/// record of rays whose box records its parent node has just read, and the two in one
+/// line make that one miss instead of two (the leaves' record loads were a fifth of the
+/// traversal's time with the records in two arrays).
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct RayRecords {
+    /// The box test's record: origin, inverse direction, the closest t so far and tmax
+    /// (the indices of [`field`]).
+    boxr: [f32; 8],
+    /// The triangle test's record, as `traverse::intersect` sets a ray up: the rotated
+    /// origin, the shear, tmin, and the dominant axis (an i32's bits).
+    trir: [f32; 8],
+}
+
+/// Records (eight floats each) from one ray's box record to the next ray's: a stride in
+/// [`RayRecords`]' layout.
+const RECORD_STRIDE: usize = 2;
 
 /// A box-test record's fields, by index: origin, inverse direction, the closest t so far,
 /// and tmax (a miss's result).
@@ -280,18 +297,28 @@ impl Rays {
     /// Room for `n` rays and the lanes of a last partial step.
     fn resize(&mut self, n: usize) {
         let len = n.next_multiple_of(16);
-        self.boxr.resize(len, [0.0; 8]);
-        self.trir.resize(len, [0.0; 8]);
+        self.recs.resize(len, RayRecords::default());
         self.u.resize(len, 0.0);
         self.v.resize(len, 0.0);
         self.tri.resize(len, MISS);
         self.skipped.resize(len / 16, 0);
     }
 
+    /// The box records, [`RECORD_STRIDE`] records apart.
+    fn boxr(&mut self) -> *mut [f32; 8] {
+        self.recs.as_mut_ptr() as *mut [f32; 8]
+    }
+
+    /// The triangle records, [`RECORD_STRIDE`] records apart.
+    fn trir(&mut self) -> *mut [f32; 8] {
+        // SAFETY: the second half of each record.
+        unsafe { self.boxr().add(1) }
+    }
+
     /// Ray `i`'s result as `trace8` returns it: (t, u, v, triangle as bits), or (tmax, 0,
     /// 0, MISS).
     fn hit(&self, i: usize) -> Vec4 {
-        let b = &self.boxr[i];
+        let b = &self.recs[i].boxr;
         if self.tri[i] == MISS {
             Vec4::new(b[field::TMAX], 0.0, 0.0, f32::from_bits(MISS))
         } else {
@@ -307,7 +334,9 @@ impl Rays {
 
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{field, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, SLOT_IDLE};
+    use super::{
+        field, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, RECORD_STRIDE, SLOT_IDLE,
+    };
     use crate::layout::SLOT_ENDED;
 
     /// A child slot of a node with fewer than eight children (`cohort_scenes`'
@@ -321,7 +350,7 @@ mod avx512 {
     ///
     /// # Safety
     /// Needs AVX-512 F; the slots index `src`'s arrays.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn setup(r: &mut Rays, src: &RaySource<'_>, slots: &[u32]) {
         let n = slots.len();
         r.resize(n);
@@ -399,11 +428,11 @@ mod avx512 {
                 _mm512_div_ps(one, dz),
             );
             store_records(
-                r.boxr.as_mut_ptr().add(c),
+                r.boxr().add(RECORD_STRIDE * c),
                 [ox, oy, oz, ix, iy, iz, t, tmax],
             );
             store_records(
-                r.trir.as_mut_ptr().add(c),
+                r.trir().add(RECORD_STRIDE * c),
                 [
                     rx,
                     ry,
@@ -429,7 +458,7 @@ mod avx512 {
     /// floats: output `j` holds column `j` of rows 0-3 of the low halves, of rows 0-3 of the
     /// high halves, of rows 4-7 of the low halves, then of rows 4-7 of the high halves (in
     /// that order, four lanes each).
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     unsafe fn transpose(z: [__m512; 8]) -> [__m512; 8] {
         let t = [
             _mm512_unpacklo_ps(z[0], z[1]),
@@ -466,7 +495,7 @@ mod avx512 {
 
     /// The sixteen indices a step reads: `ids` where `lm` is full, else `idx`'s lanes
     /// (zero outside `lm`, so that no lane reads past the arrays) through `part`.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     unsafe fn step_ids(
         ids: *const u32,
         lm: __mmask16,
@@ -483,11 +512,12 @@ mod avx512 {
 
     /// The eight fields of the records of sixteen rays, field `k` in output `k`, ray `j`
     /// in lane `j`: the rays at `ids` (sixteen indices) where `lm` is full, else those of
-    /// `idx` (zero in the lanes outside `lm`, which read ray 0's record).
+    /// `idx` (zero in the lanes outside `lm`, which read ray 0's record). Ray `i`'s record
+    /// is `recs[RECORD_STRIDE * i]`.
     ///
     /// # Safety
-    /// Needs AVX-512 F; every index in `lm`'s lanes is a record of `recs`, and record 0 is.
-    #[target_feature(enable = "avx512f")]
+    /// Needs AVX-512 F; every index in `lm`'s lanes is a ray of `recs`, and ray 0 is.
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn load_records(
         recs: *const [f32; 8],
         ids: *const u32,
@@ -496,7 +526,13 @@ mod avx512 {
     ) -> [__m512; 8] {
         let mut part = [0u32; 16];
         let ids = step_ids(ids, lm, idx, &mut part);
-        let rec = |j: usize| _mm256_loadu_ps(recs.add(*ids.add(j) as usize) as *const f32);
+        // Each index read from memory: LLVM otherwise takes them out of `idx` (loaded from
+        // the same list) with two extracts each, slower than a load (0.96x of the stream's
+        // time in the `stream_traversal` example).
+        let rec = |j: usize| {
+            let id = ids.add(j).read_volatile() as usize;
+            _mm256_loadu_ps(recs.add(RECORD_STRIDE * id) as *const f32)
+        };
         // Rays j and j + 4 (j < 4), then j + 4 and j + 8 (4 <= j < 8), so that the
         // transpose's lanes come out in ray order.
         let pair = |lo: usize, hi: usize| {
@@ -519,20 +555,23 @@ mod avx512 {
     }
 
     /// Stores field `k` of sixteen rays (ray `j` in lane `j` of `fields[k]`) as the
-    /// records `out[0..16]`.
+    /// records `out[RECORD_STRIDE * j]`.
     ///
     /// # Safety
-    /// Needs AVX-512 F; `out` has sixteen records.
-    #[target_feature(enable = "avx512f")]
+    /// Needs AVX-512 F; `out` has sixteen rays' records.
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn store_records(out: *mut [f32; 8], fields: [__m512; 8]) {
         let cols = transpose(fields);
         // Column j holds fields 0-3 of rays j and j + 8, then fields 4-7 of the two.
         let order = _mm512_setr_epi32(0, 1, 2, 3, 8, 9, 10, 11, 4, 5, 6, 7, 12, 13, 14, 15);
         for (j, &col) in cols.iter().enumerate() {
             let both = _mm512_permutexvar_ps(order, col);
-            _mm256_storeu_ps(out.add(j) as *mut f32, _mm512_castps512_ps256(both));
             _mm256_storeu_ps(
-                out.add(j + 8) as *mut f32,
+                out.add(RECORD_STRIDE * j) as *mut f32,
+                _mm512_castps512_ps256(both),
+            );
+            _mm256_storeu_ps(
+                out.add(RECORD_STRIDE * (j + 8)) as *mut f32,
                 _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(both))),
             );
         }
@@ -546,7 +585,7 @@ mod avx512 {
     ///
     /// # Safety
     /// Needs AVX-512 F; every slot in `lm`'s lanes indexes `v`, and so does 0.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn load_vec4s(
         v: *const glam::Vec4,
         ids: *const u32,
@@ -571,7 +610,8 @@ mod avx512 {
             // Register q holds slots q, q + 4, q + 8 and q + 12, so that the transpose's
             // lanes come out in slot order.
             std::array::from_fn(|q| {
-                let r = |k: usize| row(*ids.add(q + 4 * k));
+                // Read from memory, as in `load_records`.
+                let r = |k: usize| row(ids.add(q + 4 * k).read_volatile());
                 let z = _mm512_castps128_ps512(r(0));
                 let z = _mm512_insertf32x4::<1>(z, r(1));
                 let z = _mm512_insertf32x4::<2>(z, r(2));
@@ -597,19 +637,19 @@ mod avx512 {
     /// # Safety
     /// Needs AVX-512 F; `r` was set up from `part` with `Skip::Done`, the slots index
     /// `hits`, and no other thread writes `part`'s slots.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn write_hits(r: &Rays, part: &[u32], hits: *mut glam::Vec4) {
         let zero = _mm512_setzero_ps();
         let n = part.len();
-        let recs = r.boxr.as_ptr() as *const f32;
+        let recs = r.recs.as_ptr() as *const f32;
         let mut c = 0;
         while c < n {
             let lm = lanes(n - c);
             let at = part.as_ptr().add(c);
             // The slots whose path is done (`Skip::Done`, as the set-up found them).
             let done = r.skipped[c / 16];
-            // Rays c.. are consecutive records: t and tmax eight floats apart.
-            let rec = _mm512_slli_epi32::<3>(_mm512_add_epi32(
+            // Rays c.. are consecutive: t and tmax sixteen floats apart.
+            let rec = _mm512_slli_epi32::<4>(_mm512_add_epi32(
                 _mm512_set1_epi32(c as i32),
                 _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
             ));
@@ -638,7 +678,7 @@ mod avx512 {
     /// # Safety
     /// Needs AVX-512 F; the slots index the four arrays, which hold at least one element,
     /// and no other thread writes `part`'s slots.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn finish_shadows(
         r: &Rays,
         part: &[u32],
@@ -704,7 +744,7 @@ mod avx512 {
     ///
     /// # Safety
     /// Needs AVX-512 F; the slots of `mask`'s lanes index `v` (`ids` is read only there).
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn store_vec4s(
         v: *mut glam::Vec4,
         ids: *const u32,
@@ -756,7 +796,7 @@ mod avx512 {
 
     /// The 4x4 transposes of four registers' 128-bit lanes: lane k of output e holds
     /// element e of lane k of inputs 0 to 3 (its own inverse).
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     unsafe fn transpose4(z: [__m512; 4]) -> [__m512; 4] {
         let t = [
             _mm512_unpacklo_ps(z[0], z[1]),
@@ -800,7 +840,7 @@ mod avx512 {
     ///
     /// # Safety
     /// Needs AVX-512 F.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn trace(
         r: &mut Rays,
         nodes: &[WideNode],
@@ -852,7 +892,7 @@ mod avx512 {
                 let lm = lanes(e - c);
                 let idx = _mm512_maskz_loadu_epi32(lm, base.add(c) as *const i32);
                 let [ox, oy, oz, ix, iy, iz, tmax, _] =
-                    load_records(r.boxr.as_ptr(), base.add(c), lm, idx);
+                    load_records(r.boxr(), base.add(c), lm, idx);
                 let nx = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, ix, zero);
                 let ny = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iy, zero);
                 let nz = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lm, iz, zero);
@@ -937,7 +977,7 @@ mod avx512 {
     /// The rays `ids` against triangles `first..first + count`, sixteen rays at a time, as
     /// `traverse::leaf_hits` does for one. With `any`, a ray that hits is done: its t
     /// becomes -1, which no later box or triangle test passes.
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     unsafe fn leaf(
         r: &mut Rays,
         tris: &[Triangle],
@@ -953,11 +993,11 @@ mod avx512 {
             let lm = lanes(ids.len() - c);
             let idx = _mm512_maskz_loadu_epi32(lm, ids.as_ptr().add(c) as *const i32);
             let [rx, ry, rz, sx, sy, sz, tmin, kz] =
-                load_records(r.trir.as_ptr(), ids.as_ptr().add(c), lm, idx);
+                load_records(r.trir(), ids.as_ptr().add(c), lm, idx);
             let kz = _mm512_castps_si512(kz);
             // The closest t so far, in the box records.
-            let t_at = (r.boxr.as_mut_ptr() as *mut f32).add(field::T);
-            let rec = _mm512_slli_epi32::<3>(idx);
+            let t_at = (r.boxr() as *mut f32).add(field::T);
+            let rec = _mm512_slli_epi32::<4>(idx);
             let k0 = _mm512_cmpeq_epi32_mask(kz, izero);
             let k1 = _mm512_cmpeq_epi32_mask(kz, _mm512_set1_epi32(1));
             // The hit so far; only the lanes a triangle hits here are written back, so u, v
@@ -971,28 +1011,28 @@ mod avx512 {
             let mut btri = izero;
             let mut changed: __mmask16 = 0;
             // `rotate(v, kz)` per lane, less the ray's rotated origin: kz 0 -> (y, z, x),
-            // 1 -> (z, x, y), 2 -> (x, y, z).
-            let rel = |v: Vec3| {
-                let (x, y, z) = (
-                    _mm512_set1_ps(v.x),
-                    _mm512_set1_ps(v.y),
-                    _mm512_set1_ps(v.z),
-                );
-                let px = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, x, z), y);
-                let py = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, y, x), z);
-                let pz = _mm512_mask_blend_ps(k0, _mm512_mask_blend_ps(k1, z, y), x);
+            // 1 -> (z, x, y), 2 -> (x, y, z), as an in-lane permute of the vertex broadcast
+            // to each 128-bit lane (two blends per component cost a seventh of the stream's
+            // time on closest hits; this moves the same floats).
+            let (i0, i1, i2) = (izero, _mm512_set1_epi32(1), _mm512_set1_epi32(2));
+            let pick_x = _mm512_mask_mov_epi32(_mm512_mask_mov_epi32(i0, k1, i2), k0, i1);
+            let pick_y = _mm512_mask_mov_epi32(_mm512_mask_mov_epi32(i1, k1, i0), k0, i2);
+            let pick_z = kz;
+            let rel = |v: &Vec3| {
+                // A vertex and the four bytes after it (`Triangle` pads each to 16).
+                let v = _mm512_broadcast_f32x4(_mm_loadu_ps(v as *const Vec3 as *const f32));
                 (
-                    _mm512_sub_ps(px, rx),
-                    _mm512_sub_ps(py, ry),
-                    _mm512_sub_ps(pz, rz),
+                    _mm512_sub_ps(_mm512_permutevar_ps(v, pick_x), rx),
+                    _mm512_sub_ps(_mm512_permutevar_ps(v, pick_y), ry),
+                    _mm512_sub_ps(_mm512_permutevar_ps(v, pick_z), rz),
                 )
             };
             for k in first..first + count {
                 let t = &tris[k as usize];
                 // `traverse::intersect`, operation for operation.
-                let (a_x, a_y, a_z) = rel(t.v0);
-                let (b_x, b_y, b_z) = rel(t.v1);
-                let (c_x, c_y, c_z) = rel(t.v2);
+                let (a_x, a_y, a_z) = rel(&t.v0);
+                let (b_x, b_y, b_z) = rel(&t.v1);
+                let (c_x, c_y, c_z) = rel(&t.v2);
                 let ax = _mm512_sub_ps(a_x, _mm512_mul_ps(sx, a_z));
                 let ay = _mm512_sub_ps(a_y, _mm512_mul_ps(sy, a_z));
                 let bx = _mm512_sub_ps(b_x, _mm512_mul_ps(sx, b_z));
@@ -1010,9 +1050,9 @@ mod avx512 {
                     | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(w, zero);
                 let det = _mm512_add_ps(_mm512_add_ps(u, v), w);
                 let ok = lm & !(lt & gt) & _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(det, zero);
-                if ok == 0 {
-                    continue;
-                }
+                // No branch on `ok`: whether any of sixteen rays passes a triangle's edges
+                // is a coin toss the predictor loses (computed regardless: 0.95x of the
+                // closest hits' time in the `stream_traversal` example).
                 let szz = |z| _mm512_mul_ps(sz, z);
                 let tt = _mm512_div_ps(
                     _mm512_add_ps(
@@ -1057,6 +1097,7 @@ mod avx512 {
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::avx512::{load_records, load_vec4s, store_records, store_vec4s};
+    use super::RECORD_STRIDE;
     use std::arch::x86_64::*;
 
     /// Records stored from sixteen rays' fields read back, in any order of rays, as the
@@ -1067,18 +1108,18 @@ mod tests {
             return;
         }
         let value = |ray: usize, k: usize| (ray * 8 + k) as f32 + 0.5;
-        let mut recs = vec![[0f32; 8]; 32];
-        // SAFETY: AVX-512 F was checked; 32 records hold both steps of sixteen.
+        let mut recs = vec![[0f32; 8]; 32 * RECORD_STRIDE];
+        // SAFETY: AVX-512 F was checked; the records hold both steps of sixteen rays.
         unsafe {
             for step in 0..2 {
                 let fields: [__m512; 8] = std::array::from_fn(|k| {
                     let lane: [f32; 16] = std::array::from_fn(|j| value(step * 16 + j, k));
                     _mm512_loadu_ps(lane.as_ptr())
                 });
-                store_records(recs.as_mut_ptr().add(step * 16), fields);
+                store_records(recs.as_mut_ptr().add(RECORD_STRIDE * step * 16), fields);
             }
         }
-        for (ray, rec) in recs.iter().enumerate() {
+        for (ray, rec) in recs.iter().step_by(RECORD_STRIDE).enumerate() {
             assert_eq!(*rec, std::array::from_fn(|k| value(ray, k)), "record {ray}");
         }
         let ids: [u32; 16] = [31, 0, 7, 16, 3, 30, 9, 12, 1, 22, 5, 27, 18, 2, 11, 25];
