@@ -1079,15 +1079,34 @@ mod avx512 {
                     // Only whether it hit is wanted (`trace_shadow8`): its t ends the traversal.
                     bt = _mm512_mask_blend_ps(changed, bt, _mm512_set1_ps(-1.0));
                 }
-                _mm512_mask_i32scatter_ps::<4>(t_at, changed, rec, bt);
-                _mm512_mask_i32scatter_ps::<4>(r.u.as_mut_ptr(), changed, idx, bu);
-                _mm512_mask_i32scatter_ps::<4>(r.v.as_mut_ptr(), changed, idx, bv);
-                _mm512_mask_i32scatter_epi32::<4>(
-                    r.tri.as_mut_ptr() as *mut i32,
-                    changed,
+                // Lane by lane over the changed lanes (a few of sixteen): four scatters took
+                // longer than these scalar stores.
+                let mut lane = [[0u32; 16]; 5];
+                for (to, from) in lane.iter_mut().zip([
                     idx,
+                    _mm512_castps_si512(bt),
+                    _mm512_castps_si512(bu),
+                    _mm512_castps_si512(bv),
                     btri,
+                ]) {
+                    _mm512_storeu_si512(to.as_mut_ptr() as *mut __m512i, from);
+                }
+                let (t_at, u, v, tri) = (
+                    t_at as *mut u32,
+                    r.u.as_mut_ptr() as *mut u32,
+                    r.v.as_mut_ptr() as *mut u32,
+                    r.tri.as_mut_ptr(),
                 );
+                let mut m = changed;
+                while m != 0 {
+                    let j = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let i = lane[0][j] as usize;
+                    *t_at.add(8 * RECORD_STRIDE * i) = lane[1][j];
+                    *u.add(i) = lane[2][j];
+                    *v.add(i) = lane[3][j];
+                    *tri.add(i) = lane[4][j];
+                }
             }
             c += 16;
         }
