@@ -29,6 +29,8 @@ use crate::traverse_wide::WideNode;
 use cohort::runtime::cpu::LaneArgs;
 use glam::{UVec4, Vec4};
 
+mod balance;
+
 /// Rays per stream at the least when a dispatch is split over the cores. Shorter streams
 /// leave more of a step's sixteen lanes empty deep in the tree (0.51x of `trace8`'s time
 /// per ray with 4096 rays, 0.27x with 65536), but a core left idle costs more: with 8192
@@ -210,7 +212,8 @@ enum Skip<'a> {
 }
 
 /// Traces the rays of `slots` in streams spread over the cores and hands each stream's
-/// rays, with its slots (ray `i` is slot `part[i]`'s), to `done`.
+/// rays, with its slots (ray `i` is slot `part[i]`'s), to `done`. The streams' cuts of
+/// the list move with the time their rays took in the last dispatch ([`balance`]).
 fn trace_slots(
     slots: &[u32],
     any: bool,
@@ -220,12 +223,22 @@ fn trace_slots(
     done: impl Fn(&Rays, &[u32]) + Sync,
 ) {
     use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
     if slots.is_empty() {
         return;
     }
     let threads = rayon::current_num_threads().max(1);
     let chunk = slots.len().div_ceil(threads).clamp(MIN_STREAM, MAX_STREAM);
-    slots.par_chunks(chunk).for_each(|part| {
+    let streams = slots.len().div_ceil(chunk);
+    // Cut at whole steps, so that a list in slot order keeps its steps of consecutive slots.
+    let cuts = balance::cuts(any, slots.len(), streams, 16);
+    let nanos: Vec<AtomicU64> = (0..streams).map(|_| AtomicU64::new(0)).collect();
+    (0..streams).into_par_iter().for_each(|k| {
+        let part = &slots[cuts[k]..cuts[k + 1]];
+        if part.is_empty() {
+            return;
+        }
+        let start = std::time::Instant::now();
         STREAM.with(|cell| {
             let st = &mut *cell.borrow_mut();
             #[cfg(target_arch = "x86_64")]
@@ -235,8 +248,16 @@ fn trace_slots(
                 avx512::trace(&mut st.rays, nodes, tris, any, &mut st.arena, part.len())
             };
             done(&st.rays, part);
-        })
+        });
+        nanos[k].store(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
     });
+    if streams > 1 {
+        let seconds: Vec<f64> = nanos
+            .iter()
+            .map(|n| n.load(Ordering::Relaxed) as f64 * 1e-9)
+            .collect();
+        balance::record(any, &cuts, slots.len(), &seconds);
+    }
 }
 
 /// One thread's stream: its rays and the index lists of the children being visited.
