@@ -286,6 +286,9 @@ struct Rays {
     /// Per step of sixteen rays, the lanes the set-up found with no ray to trace
     /// ([`Skip`]), so that a path ray's slot state is read once per dispatch.
     skipped: Vec<u16>,
+    /// Per step of sixteen rays, the lanes whose ray is traced: the root's list holds
+    /// only these (the others keep the miss the set-up gave them).
+    traced: Vec<u16>,
 }
 
 /// A ray's two records side by side in one 64-byte line: a leaf reads the triangle
@@ -323,6 +326,7 @@ impl Rays {
         self.v.resize(len, 0.0);
         self.tri.resize(len, MISS);
         self.skipped.resize(len / 16, 0);
+        self.traced.resize(len / 16, 0);
     }
 
     /// The box records, [`RECORD_STRIDE`] records apart.
@@ -441,6 +445,7 @@ mod avx512 {
                 & !skip
                 & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(dot(dx, dy, dz), zero)
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dot(ox, oy, oz), _mm512_set1_ps(1.0e36));
+            r.traced[c / 16] = go & lm;
             // A ray `trace8` stops before its first node gets a t no box passes.
             let t = _mm512_mask_blend_ps(go, _mm512_set1_ps(-1.0), tmax);
             let (ix, iy, iz) = (
@@ -878,11 +883,24 @@ mod avx512 {
         if arena.len() < n + 16 {
             arena.resize(n + 16, 0);
         }
-        for (i, x) in arena[..n].iter_mut().enumerate() {
-            *x = i as u32;
+        // Only the rays the set-up found to trace: a done path's slot (listed until the
+        // next retirement, and always with coherent groups, which retire none) or a slot
+        // without a shadow ray would otherwise take lanes at every node of the root's level.
+        let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let mut live = 0;
+        for (step, &go) in r.traced[..n.div_ceil(16)].iter().enumerate() {
+            let ids = _mm512_add_epi32(_mm512_set1_epi32(16 * step as i32), iota);
+            _mm512_storeu_si512(
+                arena.as_mut_ptr().add(live) as *mut __m512i,
+                _mm512_maskz_compress_epi32(go, ids),
+            );
+            live += go.count_ones() as usize;
+        }
+        if live == 0 {
+            return;
         }
         // (node, list start, list end, where its children's lists go)
-        let mut stack: Vec<(u32, usize, usize, usize)> = vec![(0, 0, n, n + 16)];
+        let mut stack: Vec<(u32, usize, usize, usize)> = vec![(0, 0, live, n + 16)];
         let scale = _mm512_set1_ps(1.0000004);
         let zero = _mm512_setzero_ps();
         while let Some((node, s, e, top)) = stack.pop() {
