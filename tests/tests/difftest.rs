@@ -675,6 +675,54 @@ fn sines_match_the_host_exactly() {
     assert!(cpus >= 2, "the host form and at least one vector form");
 }
 
+/// `acos` on the CPU backend's forms, bit for bit against the host run (NaNs: both NaN):
+/// the edges of the ranges where the vector form computes it itself (|x| <= 2^-26, < 0.5,
+/// up to 1, each sign) and where it calls the C library (|x| > 1, infinities, NaN), and
+/// random values. The GPUs' are bounded by `transcendental_math`.
+#[test]
+fn arccosines_match_the_host_exactly() {
+    use cohort_tests::kernels::mathfns::*;
+    let mut xs = vec![
+        0.0f32,
+        2.0f32.powi(-26),
+        0.5,
+        1.0,
+        f32::INFINITY,
+        f32::NAN,
+        2.0,
+    ];
+    for x in xs.clone() {
+        xs.extend([
+            f32::from_bits(x.to_bits().wrapping_sub(1)),
+            f32::from_bits(x.to_bits() + 1),
+        ]);
+    }
+    let mut rng = Rng(13);
+    xs.extend((0..3000).map(|_| rng.f32(-1.0, 1.0)));
+    xs.extend((0..1000).map(|_| f32::from_bits(rng.next_u32())));
+    xs.extend(xs.clone().iter().map(|x| -x));
+    let mut host = vec![0.0f32; xs.len()];
+    for_each_invocation(xs.len() as u32, 64, Group::Thread, |inv| {
+        arccosines(inv.global_index, &xs, &mut host)
+    });
+    let mut cpus = 0;
+    for d in devices().iter().filter(|d| is_cpu(d)) {
+        let x = d.upload(&xs).unwrap();
+        let o = d.alloc::<f32>(xs.len()).unwrap();
+        arccosines::launch(d, xs.len() as u32, &x, &o).unwrap();
+        for (k, (a, b)) in d.read(&o).unwrap().iter().zip(&host).enumerate() {
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "acos {:e} ({:#x}) on a CPU form: {a:e}, host {b:e}",
+                xs[k],
+                xs[k].to_bits()
+            );
+        }
+        cpus += 1;
+    }
+    assert!(cpus >= 2, "the host form and at least one vector form");
+}
+
 #[test]
 fn vector_and_matrix_math() {
     use cohort_tests::kernels::vectors::*;

@@ -16,6 +16,17 @@ pub fn mathfns(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [Vec4]) {
     out[i] = Vec4::new(a, b, c, d);
 }
 
+/// `acos`: the CPU backend's vector form computes it in vector instructions for |x| <= 1
+/// and calls the C library beyond, and must give the host's bits either way.
+#[kernel(workgroup = 64)]
+pub fn arccosines(#[builtin(global_index)] gi: u32, xs: &[f32], out: &mut [f32]) {
+    let i = gi as usize;
+    if i >= xs.len() {
+        return;
+    }
+    out[i] = xs[i].acos();
+}
+
 /// `sin` and `cos` alone and paired with each other: the CPU backend's vector form computes
 /// them in vector instructions below |x| = 120 and calls the C library beyond, and must give
 /// the host's bits either way.

@@ -82,7 +82,7 @@ impl Fx<'_> {
     }
 
     /// An LLVM intrinsic on `<W x float>`, e.g. `sqrt`.
-    fn fintr(&mut self, name: &str, xs: &[String]) -> String {
+    pub(super) fn fintr(&mut self, name: &str, xs: &[String]) -> String {
         let v = lanes("float");
         let args: Vec<(String, String)> = xs.iter().map(|x| (v.clone(), x.clone())).collect();
         self.call(&v, &format!("llvm.{name}.v{}f32", w()), &args)
@@ -724,6 +724,9 @@ impl Fx<'_> {
             Mf::Pow if float => self.map(&args, n, st, per_lane("pow")),
             Mf::Fma if float => self.map(&args, n, st, intrinsic("fma")),
             Mf::Tan if float => self.map(&args, n, st, libm("tanf")),
+            Mf::Acos if float && super::acos::libm_agrees() => {
+                self.map(&args, n, st, |fx, c| Ok(fx.acos(&c[0])))
+            }
             Mf::Acos if float => self.map(&args, n, st, libm("acosf")),
             Mf::Asin if float => self.map(&args, n, st, libm("asinf")),
             Mf::Atan if float => self.map(&args, n, st, libm("atanf")),

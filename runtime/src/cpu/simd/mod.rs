@@ -6,6 +6,7 @@
 //! `COHORT_CPU_SIMD_DUMP=DIR` writes each kernel's IR to `DIR/<kernel>.ll`;
 //! `COHORT_CPU_SIMD_PERF_MAP=1` names each one's code for `perf` (`perf_map`).
 
+mod acos;
 mod choice;
 mod deferred;
 mod expr;

@@ -201,16 +201,23 @@ impl Fx<'_> {
             x.to_string()
         };
         let fast = self.op(&format!("select {m} {tiny}, {v} {at_tiny}, {v} {poly}"));
-        // The C function for lanes beyond the range, where a running lane is one.
+        self.with_c_lanes(x, &fast, &beyond, if cos { "cosf" } else { "sinf" })
+    }
+
+    /// `fast`, but the C function `name` of `x` in the lanes of `beyond` (outside the range
+    /// that a vector sequence covers), called only where a running lane is one.
+    pub(super) fn with_c_lanes(&mut self, x: &str, fast: &str, beyond: &str, name: &str) -> String {
+        let v = lanes("float");
+        let m = Self::mask_ty();
         let exec = self.exec();
-        let slow = self.and(&exec, &beyond);
+        let slow = self.and(&exec, beyond);
         let any = self.any(&slow);
         let slot = self.alloca(&v);
         self.line(&format!("store {v} {fast}, ptr {slot}"));
         let (call, join) = (self.label(), self.label());
         self.line(&format!("br i1 {any}, label %{call}, label %{join}"));
         self.body.push_str(&format!("{call}:\n"));
-        let helper = self.per_lane(if cos { "cosf" } else { "sinf" });
+        let helper = self.per_lane(name);
         let libm = self.op(&format!("call {v} @{helper}({v} {x})"));
         let mixed = self.op(&format!("select {m} {slow}, {v} {libm}, {v} {fast}"));
         self.line(&format!("store {v} {mixed}, ptr {slot}"));
@@ -219,7 +226,7 @@ impl Fx<'_> {
         self.op(&format!("load {v}, ptr {slot}"))
     }
 
-    /// A function of the module that calls the C function `name` (`sinf`, `cosf`) on every
+    /// A function of the module that calls the C function `name` (`sinf`, `cosf`, `acosf`) on every
     /// lane: one copy per kernel, not inlined, for the rare lanes beyond the vector
     /// sequence's range. (Sixteen calls inlined at each site took LLVM 15 % longer to
     /// compile stanford-like's `extend` than before the vector sequence.)
