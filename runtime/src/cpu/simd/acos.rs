@@ -49,6 +49,16 @@ fn c(bits: u32) -> f32 {
     f32::from_bits(bits)
 }
 
+/// The C function's result for |x| <= 2^-26: pi/2, as its two parts' float sum.
+fn at_tiny() -> f32 {
+    c(PIO2_HI) + c(PIO2_LO)
+}
+
+/// Its result for x = -1: pi as a float plus twice pi/2's low part.
+fn at_minus_one() -> f32 {
+    c(PI) + 2.0 * c(PIO2_LO)
+}
+
 /// The rational function's numerator and denominator at `z`.
 fn p_and_q(z: f32) -> (f32, f32) {
     let p = z
@@ -66,14 +76,10 @@ pub(crate) fn reference(x: f32) -> Option<f32> {
         return None;
     }
     if ix == ONE {
-        return Some(if x > 0.0 {
-            0.0
-        } else {
-            c(PI) + 2.0 * c(PIO2_LO)
-        });
+        return Some(if x > 0.0 { 0.0 } else { at_minus_one() });
     }
     if ix <= TINY {
-        return Some(c(PIO2_HI) + c(PIO2_LO));
+        return Some(at_tiny());
     }
     if ix < HALF {
         let (p, q) = p_and_q(x * x);
@@ -130,8 +136,7 @@ impl Fx<'_> {
         let v = lanes("float");
         let vi = lanes("i32");
         let m = Self::mask_ty();
-        let fc =
-            |bits: u32| splat_const("float", &format!("0x{:016X}", f64::from(c(bits)).to_bits()));
+        let fc = |bits: u32| fconst(c(bits));
         let ic = |n: u32| splat_const("i32", &(n as i32).to_string());
         let bits = self.op(&format!("bitcast {v} {x} to {vi}"));
         let ix = self.op(&format!("and {vi} {bits}, {}", ic(0x7fff_ffff)));
@@ -150,16 +155,8 @@ impl Fx<'_> {
         let ends = self.op(&format!("fmul {v} {ends}, {half}"));
         let z = self.op(&format!("select {m} {small}, {v} {xx}, {v} {ends}"));
         // p = z (ps0 + z (ps1 + ... + z ps5)), q = 1 + z (qs1 + ... + z qs4), r = p / q.
-        let mut p = self.op(&format!("fmul {v} {z}, {}", fc(PS[5])));
-        for k in (0..5).rev() {
-            let sum = self.op(&format!("fadd {v} {}, {p}", fc(PS[k])));
-            p = self.op(&format!("fmul {v} {z}, {sum}"));
-        }
-        let mut q = self.op(&format!("fmul {v} {z}, {}", fc(QS[3])));
-        for k in (0..3).rev() {
-            let sum = self.op(&format!("fadd {v} {}, {q}", fc(QS[k])));
-            q = self.op(&format!("fmul {v} {z}, {sum}"));
-        }
+        let p = self.z_times_poly(&z, &PS);
+        let q = self.z_times_poly(&z, &QS);
         let q = self.op(&format!("fadd {v} {fone}, {q}"));
         let r = self.op(&format!("fdiv {v} {p}, {q}"));
         // |x| < 0.5: pi/2 - (x - (lo - x r)).
@@ -187,26 +184,35 @@ impl Fx<'_> {
         let at_pos = self.op(&format!("fadd {v} {t}, {t}"));
         let ends = self.op(&format!("select {m} {neg}, {v} {at_neg}, {v} {at_pos}"));
         let mid = self.op(&format!("select {m} {small}, {v} {at_small}, {v} {ends}"));
-        let at_tiny = fc_sum(PIO2_HI, PIO2_LO);
-        let mid = self.op(&format!("select {m} {tiny}, {v} {at_tiny}, {v} {mid}"));
+        let mid = self.op(&format!(
+            "select {m} {tiny}, {v} {}, {v} {mid}",
+            fconst(at_tiny())
+        ));
         let at_one = self.op(&format!(
             "select {m} {neg}, {v} {}, {v} zeroinitializer",
-            splat_const(
-                "float",
-                &format!("0x{:016X}", f64::from(c(PI) + 2.0 * c(PIO2_LO)).to_bits())
-            )
+            fconst(at_minus_one())
         ));
         let fast = self.op(&format!("select {m} {one}, {v} {at_one}, {v} {mid}"));
         self.with_c_lanes(x, &fast, &beyond, "acosf")
     }
+
+    /// `z (c0 + z (c1 + ... + z cn))` of float lanes `z`, the coefficients' bits in `cs`,
+    /// in the C function's order of operations.
+    fn z_times_poly(&mut self, z: &str, cs: &[u32]) -> String {
+        let v = lanes("float");
+        let (last, rest) = cs.split_last().expect("a coefficient");
+        let mut acc = self.op(&format!("fmul {v} {z}, {}", fconst(c(*last))));
+        for &k in rest.iter().rev() {
+            let sum = self.op(&format!("fadd {v} {}, {acc}", fconst(c(k))));
+            acc = self.op(&format!("fmul {v} {z}, {sum}"));
+        }
+        acc
+    }
 }
 
-/// `a + b` of two floats' bits, as a constant of every lane.
-fn fc_sum(a: u32, b: u32) -> String {
-    splat_const(
-        "float",
-        &format!("0x{:016X}", f64::from(c(a) + c(b)).to_bits()),
-    )
+/// A float as a constant of every lane (LLVM writes a float constant as its double's bits).
+fn fconst(x: f32) -> String {
+    splat_const("float", &format!("0x{:016X}", f64::from(x).to_bits()))
 }
 
 #[cfg(test)]

@@ -226,8 +226,8 @@ impl Fx<'_> {
         self.op(&format!("load {v}, ptr {slot}"))
     }
 
-    /// A function of the module that calls the C function `name` (`sinf`, `cosf`, `acosf`) on every
-    /// lane: one copy per kernel, not inlined, for the rare lanes beyond the vector
+    /// A function of the module that calls the C function `name` (`sinf`, `cosf`, `acosf`)
+    /// on every lane: one copy per kernel, not inlined, for the rare lanes beyond the vector
     /// sequence's range. (Sixteen calls inlined at each site took LLVM 15 % longer to
     /// compile stanford-like's `extend` than before the vector sequence.)
     fn per_lane(&mut self, name: &str) -> String {
