@@ -815,6 +815,26 @@ fn integer_arithmetic_wraps_and_divides_as_documented() {
             b.push(*y);
         }
     }
+    // Pairs over the whole range, divisors of every magnitude, and dividends one below
+    // a multiple of the divisor, whose quotient lies closest under an integer: the CPU
+    // vector form divides by a non-constant through f64 (`cpu::simd`), exact only if
+    // such a quotient never rounds up.
+    let mut h = 0x9e37_79b9u32;
+    let mut next = || {
+        h ^= h << 13;
+        h ^= h >> 17;
+        h ^= h << 5;
+        h
+    };
+    for k in 0..4096u32 {
+        let x = next();
+        let d = next() >> (k % 32);
+        let q = next() >> (31 - k % 31);
+        a.push(x as i32);
+        b.push(d as i32);
+        a.push(q.wrapping_mul(d).wrapping_sub(1) as i32);
+        b.push(d as i32);
+    }
     let n = a.len();
     let mut host = vec![0i32; n * INT_N];
     // The host form wraps in this (debug) build instead of panicking.

@@ -519,6 +519,32 @@ impl Fx<'_> {
             zero.clone()
         };
         let d = self.op(&format!("select {m} {bad}, {v} {one}, {v} {b}"));
+        // A constant divisor stays an integer division, which LLVM turns into a multiply
+        // and shifts. Any other goes through f64: x86 has no vector integer division, so
+        // LLVM splits `udiv` into one scalar `div` per lane (a coherent `extend` has three
+        // per bounce). For 32-bit operands the quotient truncated from the correctly
+        // rounded f64 one is exact: a quotient k - r/d (r >= 1) lies at least 1/|a| >=
+        // 2^-32 below k relative to it, far above f64's 2^-53, so it never rounds up to k.
+        if !b.starts_with('<') {
+            let (to_f, to_i) = if signed {
+                ("sitofp", "fptosi")
+            } else {
+                ("uitofp", "fptoui")
+            };
+            let f64s = lanes("double");
+            let fa = self.op(&format!("{to_f} {v} {a} to {f64s}"));
+            let fd = self.op(&format!("{to_f} {v} {d} to {f64s}"));
+            let fq = self.op(&format!("fdiv {f64s} {fa}, {fd}"));
+            let q = self.op(&format!("{to_i} {f64s} {fq} to {v}"));
+            return match op {
+                Bo::Divide => self.op(&format!("select {m} {zero}, {v} {a}, {v} {q}")),
+                // a - q d wraps in i32 to the remainder, whose sign is a's (WGSL's `%`).
+                _ => {
+                    let qd = self.op(&format!("mul {v} {q}, {d}"));
+                    self.op(&format!("sub {v} {a}, {qd}"))
+                }
+            };
+        }
         match (op, signed) {
             (Bo::Divide, s) => {
                 let q = self.op(&format!("{} {v} {a}, {d}", if s { "sdiv" } else { "udiv" }));
@@ -589,16 +615,7 @@ impl Fx<'_> {
                 (Float, Sint | Uint, false) | (Sint | Uint, Float, false) => {
                     fx.op(&format!("bitcast {fv} {a} to {tv}"))
                 }
-                (Float, Sint, true) => fx.call(
-                    &tv,
-                    &format!("llvm.fptosi.sat.v{w}i32.v{w}f32", w = w()),
-                    &[(fv.clone(), a.clone())],
-                ),
-                (Float, Uint, true) => fx.call(
-                    &tv,
-                    &format!("llvm.fptoui.sat.v{w}i32.v{w}f32", w = w()),
-                    &[(fv.clone(), a.clone())],
-                ),
+                (Float, t @ (Sint | Uint), true) => fx.float_to_int(a, t == Sint),
                 (Sint, Float, true) => fx.op(&format!("sitofp {fv} {a} to {tv}")),
                 (Uint, Float, true) => fx.op(&format!("uitofp {fv} {a} to {tv}")),
                 (Bool, Sint | Uint, true) => fx.op(&format!("zext {fv} {a} to {tv}")),
@@ -608,6 +625,42 @@ impl Fx<'_> {
                 _ => return Err(format!("casting {from:?} to {to:?}")),
             })
         })
+    }
+
+    /// Rust's `as i32` / `as u32` of f32 lanes (WGSL's conversion): truncated, NaN to 0,
+    /// saturated at the type's bounds. The value is clamped into range first, so that
+    /// the plain `fptosi` / `fptoui` is one vector instruction: LLVM turns its saturating
+    /// intrinsics into a compare, a scalar conversion and two moves per lane (a coherent
+    /// `extend` converts two floats per bounce).
+    fn float_to_int(&mut self, a: &str, signed: bool) -> String {
+        let (v, vi, m) = (lanes("float"), lanes("i32"), Self::mask_ty());
+        let f = |x: f32| splat_const("float", &float_text(x));
+        // The largest f32 below the type's upper bound, which converts exactly.
+        let (low, high, beyond, at_beyond, to) = if signed {
+            (
+                -2_147_483_648.0f32,
+                2_147_483_520.0f32,
+                2_147_483_648.0f32,
+                i32::MAX,
+                "fptosi",
+            )
+        } else {
+            (0.0, 4_294_967_040.0, 4_294_967_296.0, -1, "fptoui")
+        };
+        // NaN becomes 0, then what lies outside [low, high] is clamped to it; values at or
+        // past the upper bound take the type's maximum below.
+        let nan = self.op(&format!("fcmp uno {v} {a}, {a}"));
+        let x = self.op(&format!("select {m} {nan}, {v} zeroinitializer, {v} {a}"));
+        let under = self.op(&format!("fcmp olt {v} {x}, {}", f(low)));
+        let x = self.op(&format!("select {m} {under}, {v} {}, {v} {x}", f(low)));
+        let over = self.op(&format!("fcmp ogt {v} {x}, {}", f(high)));
+        let x = self.op(&format!("select {m} {over}, {v} {}, {v} {x}", f(high)));
+        let t = self.op(&format!("{to} {v} {x} to {vi}"));
+        let past = self.op(&format!("fcmp oge {v} {a}, {}", f(beyond)));
+        self.op(&format!(
+            "select {m} {past}, {vi} {}, {vi} {t}",
+            splat_const("i32", &at_beyond.to_string())
+        ))
     }
 
     fn math(
