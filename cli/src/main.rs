@@ -140,6 +140,12 @@ struct RenderArgs {
     /// (BENCHMARKS.md, equal-time table).
     #[arg(long)]
     compact: bool,
+    /// Keep finished slots in the live list. By default, once a quarter of the listed
+    /// slots have finished their pixel's paths, the list is cut to the others, where the
+    /// image does not depend on which invocation takes a slot; it is the same image either
+    /// way, so this is for comparisons of speed.
+    #[arg(long)]
+    no_retire: bool,
     /// Sort the rays by direction octant and origin cell before the traversal, every K
     /// iterations (0: never, the default). The image is the same; it changes only the
     /// order in which the traversal takes the rays (BENCHMARKS.md: it does not pay).
@@ -284,6 +290,7 @@ impl RenderArgs {
             interleave: self.interleave,
             coherent_glossy: self.coherent_glossy,
             compact: self.compact,
+            retire: !self.no_retire,
             reorder: self.reorder,
             shading: self.shading,
             integrator: self.integrator,

@@ -22,6 +22,7 @@ pub struct Config {
     pub interleave: u32,
     pub coherent_glossy: bool,
     pub compact: bool,
+    pub retire: bool,
     pub reorder: u32,
     pub shading: ShadingChoice,
     pub integrator: IntegratorChoice,
@@ -44,6 +45,7 @@ pub const NAMES: &[&str] = &[
     "interleave",
     "coherent-glossy",
     "compact",
+    "retire",
     "reorder",
     "shading",
     "integrator",
@@ -77,6 +79,7 @@ impl Config {
             "interleave" => parse_number(choices::odd, value).map(|v| self.interleave = v),
             "coherent-glossy" => parse_bool(value).map(|v| self.coherent_glossy = v),
             "compact" => parse_bool(value).map(|v| self.compact = v),
+            "retire" => parse_bool(value).map(|v| self.retire = v),
             "reorder" => parse_number(clap::value_parser!(u32), value).map(|v| self.reorder = v),
             "shading" => parse(value).map(|v| self.shading = v),
             "integrator" => parse(value).map(|v| self.integrator = v),
@@ -109,6 +112,7 @@ impl Config {
             "interleave" => self.interleave.to_string(),
             "coherent-glossy" => on_off(self.coherent_glossy),
             "compact" => on_off(self.compact),
+            "retire" => on_off(self.retire),
             "reorder" => self.reorder.to_string(),
             "shading" => n(&self.shading),
             "integrator" => n(&self.integrator),
@@ -157,6 +161,7 @@ impl Config {
             coherent_glossy: self.coherent_glossy,
             seed: self.seed,
             compact: self.compact,
+            retire: self.retire,
             reorder: self.reorder,
             shading: self.shading.to_render(),
             whole_group_end,
@@ -209,6 +214,7 @@ mod tests {
             interleave: 1,
             coherent_glossy: false,
             compact: false,
+            retire: true,
             reorder: 0,
             shading: ShadingChoice::Auto,
             integrator: IntegratorChoice::Nee,
@@ -222,11 +228,12 @@ mod tests {
     #[test]
     fn overrides_set_named_options_and_reject_unknown_ones() {
         let c = base()
-            .with_overrides("algorithm=block_256, interleave=5,compact=on")
+            .with_overrides("algorithm=block_256, interleave=5,compact=on,retire=off")
             .unwrap();
         assert_eq!(c.algorithm.name(), "block_256");
         assert_eq!(c.interleave, 5);
         assert!(c.compact);
+        assert!(!c.retire && !c.options(true).retire);
         let o = c.options(true);
         assert!(o.algorithm.coherent);
         assert_eq!(o.interleave, 5);

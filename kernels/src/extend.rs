@@ -10,15 +10,16 @@
 use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
+use crate::group_draw::{glossy_cell_draw, light_draw, patch_key, roulette_draw};
 use crate::integrator::Integrator;
 use crate::layout::*;
 use crate::light::{
     area_to_solid_angle, delta_light_arrival, delta_light_direction, mis_power, pick_light,
-    shared_light_draw, triangle_point, triangle_weights,
+    triangle_point, triangle_weights,
 };
 use crate::path_end::PathEnd;
 use crate::perturb::{perturb_normal, perturb_weight};
-use crate::rng::{hash, stream, uniform};
+use crate::rng::{stream, uniform};
 use crate::sampling::{cell_point, DiffuseSampler};
 use crate::scatter::{
     blend_eval, blend_traits, blend_weights, BLEND_LEVELS, BLEND_NONE, BLEND_NOT_PLAIN,
@@ -310,15 +311,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // The group's shared draws come first, in uniform control flow: the patch of
     // coherent sampling and the group's Russian-roulette number. They are keyed by
     // iteration, not by path, so each shard of a render draws them from its own seed.
+    // With `SHADES_SLOT_GROUPS` each invocation computes them for the group of the slot
+    // it shades instead (`crate::group_draw`): the same numbers while the list holds
+    // every slot in order, and still the slot's own once finished slots have left it.
+    let slot_groups = shading & SHADES_SLOT_GROUPS != 0;
+    let mut slot_group = 0u32;
+    if slot_groups && gi < count[0] {
+        slot_group = idrays[gi as usize] / f.group_slots;
+    }
     // The patch is drawn only for a sampler that reads it (`DiffuseSampler::GROUP_VALUE`).
     let mut shared_patch = 0u32;
     if S::GROUP_VALUE {
-        shared_patch = group_share(|group| {
-            S::group_value(
-                stream(f.group_seed, group, f.iteration, 0x5eed),
-                f.patches_n,
-            )
-        });
+        if slot_groups {
+            shared_patch = S::group_value(patch_key(f, slot_group), f.patches_n);
+        } else {
+            shared_patch = group_share(|group| S::group_value(patch_key(f, group), f.patches_n));
+        }
     }
     // The configuration's own group draws: the Russian-roulette number of `_rr` and of
     // whole-group ends, the cell of coherent glossy sampling and the light draw of
@@ -330,20 +338,17 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut shared_cell = 0u32;
     let mut shared_light = Vec2::new(0.0, 0.0);
     if E::WHOLE_GROUP || shading & SHADES_GROUP_DRAWS != 0 {
-        // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
-        shared_rr = group_share(|group| {
-            let k = stream(f.group_seed ^ 0x2b5e, group, f.iteration, 0x7a11);
-            Vec2::new(uniform(k, 0), uniform(k, 1))
-        });
-        shared_cell =
-            group_share(|group| hash(stream(f.group_seed ^ 0x61c8, group, f.iteration, 0x9e37)));
-        // Coherent light sampling: the group's light pick and stratum.
-        shared_light = group_share(|group| {
-            shared_light_draw(
-                stream(f.group_seed ^ 0x11c3, group, f.iteration, 0x4a7f),
-                f.light_cells,
-            )
-        });
+        if slot_groups {
+            shared_rr = roulette_draw(f, slot_group);
+            shared_cell = glossy_cell_draw(f, slot_group);
+            shared_light = light_draw(f, slot_group);
+        } else {
+            // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
+            shared_rr = group_share(|group| roulette_draw(f, group));
+            shared_cell = group_share(|group| glossy_cell_draw(f, group));
+            // Coherent light sampling: the group's light pick and stratum.
+            shared_light = group_share(|group| light_draw(f, group));
+        }
     }
     // Phase 1: shade and decide per path. What phase 2 needs outlives the branch, because
     // the group may vote in between, which every invocation must reach.

@@ -24,6 +24,7 @@ pub mod copy;
 pub mod display;
 pub mod environment;
 pub mod extend;
+pub mod group_draw;
 pub mod integrator;
 pub mod layout;
 pub mod light;

@@ -38,17 +38,25 @@ pub const SHADES_QUEUE: u32 = 1 << 22;
 /// `coherent_light` is set ([`group_draws`]). Without it, and without whole-group ends,
 /// `extend` leaves those draws out.
 pub const SHADES_GROUP_DRAWS: u32 = 1 << 23;
+/// `extend` keys its group draws by the group of the slot it shades,
+/// `slot / Frame::group_slots`, not by the invocation's (`crate::group_draw`): the frame's
+/// `group_slots` is not 0 ([`group_draws`]).
+pub const SHADES_SLOT_GROUPS: u32 = 1 << 24;
 /// The first bit of a queue's index in a set with [`SHADES_QUEUE`].
-pub const QUEUE_SHIFT: u32 = 24;
+pub const QUEUE_SHIFT: u32 = 25;
 
-/// [`SHADES_GROUP_DRAWS`] where frame `f` reads the group draws it stands for, else 0: the
-/// renderer adds it to every set it builds and records `extend` with.
+/// The bits of frame `f`'s group draws, which the renderer adds to every set it builds
+/// and records `extend` with: [`SHADES_GROUP_DRAWS`] where a frame flag reads the draws it
+/// stands for, and [`SHADES_SLOT_GROUPS`] where the frame keys them by slot.
 pub fn group_draws(f: &Frame) -> u32 {
+    let mut bits = 0;
     if f.group_rr != 0 || f.coherent_glossy != 0 || f.coherent_light != 0 {
-        SHADES_GROUP_DRAWS
-    } else {
-        0
+        bits |= SHADES_GROUP_DRAWS;
     }
+    if f.group_slots != 0 {
+        bits |= SHADES_SLOT_GROUPS;
+    }
+    bits
 }
 
 /// The set of the `extend` that shades queue `queue` with `set`.

@@ -302,7 +302,10 @@ pub struct Frame {
     /// `+ 2 copies`, ... below `first_path + paths_per_pixel`, so the n-th path of a
     /// pixel still draws from (seed, pixel, n), whatever the number of copies.
     pub copies: u32,
-    pub pad1: u32,
+    /// Invocations per coherence group where `extend` keys the group draws by the slot it
+    /// shades (`cohort_kernels::group_draw`: slot `g` is in group `g / group_slots`), so
+    /// that finished slots can leave the list; 0: by the invocation's group.
+    pub group_slots: u32,
     pub pad2: u32,
 }
 

@@ -296,7 +296,7 @@ impl TypedOp for Compile<'_> {
         if compact {
             builds.push(Box::new(|| Ok(compact::artifacts(&specs.compact)?)));
         }
-        if o.retires() {
+        if o.retires(crate::renderer::draws_per_lane(d)) {
             builds.push(Box::new(|| {
                 Ok(retire::artifacts(&specs.live, &specs.compact)?)
             }));

@@ -116,6 +116,10 @@ pub struct RenderOptions {
     /// live rays by direction octant and origin cell before the traversal; 0 = never.
     /// The image is the same; only the traversal's order of rays changes.
     pub reorder: u32,
+    /// Retire finished slots from the live list where the image allows it
+    /// ([`Self::retires`]); false keeps every slot listed, for comparisons. The image is
+    /// the same either way.
+    pub retire: bool,
     /// How shading is organised: one kernel, material queues, or the faster of the two
     /// measured on the render (the default).
     pub shading: Shading,
@@ -162,12 +166,42 @@ impl RenderOptions {
             && !self.coherent_light
     }
 
+    /// Invocations per coherence group where `extend` keys the group draws by the slot it
+    /// shades (`Frame::group_slots`, `cohort_kernels::group_draw`), else 0. That key does
+    /// not change when finished slots leave the list, so such a run retires them. It
+    /// needs every invocation to compute its group's draws itself: at thread level, and
+    /// at warp and block level where the backend recomputes group shares (`per_lane`,
+    /// `Spec::recompute_group_share`); on a GPU a group's leader computes them once, and
+    /// after a retirement a warp would hold slots of several groups. Not with
+    /// whole-group ends, which vote among the invocations of a group, nor where groups
+    /// form over material queues or compacted lists.
+    pub(crate) fn group_slots(&self, per_lane: bool) -> u32 {
+        if self.per_path_sampling()
+            || self.whole_group_end.is_some()
+            || self.compact
+            || self.shading == Shading::Queues
+        {
+            return 0;
+        }
+        match self.algorithm.group {
+            Group::Thread => 1,
+            Group::Warp if per_lane => cohort::spec::WARP,
+            Group::Block(n) if per_lane => n,
+            _ => 0,
+        }
+    }
+
     /// Whether the renderer retires finished slots from the live list
-    /// (`cohort_kernels::retire`): where no group shares a draw, so that the image does
-    /// not depend on which invocation takes a slot, and without compaction, whose lists
-    /// keep every slot.
-    pub(crate) fn retires(&self) -> bool {
-        !self.compact && self.per_path_sampling()
+    /// (`cohort_kernels::retire`): where the image does not depend on which invocation
+    /// takes a slot, and without compaction, whose lists keep every slot. So where no
+    /// group shares a draw, where the draws are keyed by slot ([`Self::group_slots`]),
+    /// and at grid level, where every slot is in the one group.
+    pub(crate) fn retires(&self, per_lane: bool) -> bool {
+        self.retire
+            && !self.compact
+            && (self.per_path_sampling()
+                || self.group_slots(per_lane) != 0
+                || (self.algorithm.group == Group::Grid && self.whole_group_end.is_none()))
     }
 
     /// The paths of every pixel this run renders: (first path index, how many; 0 for a
@@ -224,6 +258,7 @@ impl Default for RenderOptions {
             size: None,
             compact: true,
             reorder: 0,
+            retire: true,
             shading: Shading::Auto,
             rr_continue: 0.8,
             roulette: Roulette::Fixed,

@@ -152,7 +152,7 @@ impl<'d> Renderer<'d> {
             ..Default::default()
         };
         apply_camera(&mut frame, &camera);
-        apply_options(&mut frame, &opts);
+        apply_options(&mut frame, &opts, draws_per_lane(device));
         // The path state is laid out and allocated on one thread while the pipelines are
         // built and created on others: neither needs the other.
         let compile = Compile {
@@ -224,7 +224,7 @@ impl<'d> Renderer<'d> {
             self.device
                 .write(&self.paths.slot_pixel, 0, &self.slot_to_pixel)?;
         }
-        apply_options(&mut self.frame, &opts);
+        apply_options(&mut self.frame, &opts, draws_per_lane(self.device));
         self.opts = opts;
         self.run = None;
         self.with_kernels(Prepare)
@@ -240,7 +240,7 @@ impl<'d> Renderer<'d> {
         };
         let (w, h) = self.size();
         validate(&opts, w, h)?;
-        apply_options(&mut self.frame, &opts);
+        apply_options(&mut self.frame, &opts, draws_per_lane(self.device));
         self.opts = opts;
         Ok(())
     }
@@ -452,7 +452,7 @@ impl<'d> Renderer<'d> {
         const TAIL_BATCH: f64 = 8.0;
         // Lists this short are not worth a retirement's four dispatches.
         const RETIRE_FROM: u32 = 256;
-        let retires = self.opts.retires();
+        let retires = self.opts.retires(draws_per_lane(self.device));
         let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
             // Submit while fewer than IN_FLIGHT batches run and what is known (finished
@@ -637,8 +637,15 @@ fn apply_camera(frame: &mut Frame, camera: &Camera) {
     frame.focus_distance = f.focus_distance;
 }
 
-/// Writes the options into the frame the kernels read.
-fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
+/// Whether device `d` has every invocation of a warp or block compute the group's draws
+/// itself (`Spec::recompute_group_share`), which lets them be keyed by slot
+/// (`RenderOptions::group_slots`).
+pub(crate) fn draws_per_lane(d: &Device) -> bool {
+    d.info().target().recompute_group_share
+}
+
+/// Writes the options into the frame the kernels read (`per_lane`: [`draws_per_lane`]).
+fn apply_options(frame: &mut Frame, opts: &RenderOptions, per_lane: bool) {
     frame.seed = opts.seed;
     (frame.first_path, frame.paths_per_pixel) = opts.path_range();
     frame.group_seed = opts.shard.group_seed(opts.seed);
@@ -649,6 +656,7 @@ fn apply_options(frame: &mut Frame, opts: &RenderOptions) {
     frame.group_end_continue = opts.whole_group_end.unwrap_or(0.0);
     frame.coherent_light = opts.coherent_light as u32;
     frame.light_cells = opts.light_cells;
+    frame.group_slots = opts.group_slots(per_lane);
 }
 
 /// Pixel of every ray slot. Interleaved sampling: slot g renders pixel D * Morton(g)

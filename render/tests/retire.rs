@@ -72,3 +72,72 @@ fn a_render_that_retires_finished_slots_is_the_same_image() {
         }
     }
 }
+
+/// Configurations whose groups share draws retire where the draws are keyed by slot (each
+/// invocation computes its group's: the thread level, and warp and block groups on the CPU
+/// backend) or where one group holds every slot (grid): the image is the one of the same
+/// render with every slot kept listed, bit for bit. Elsewhere (warp and block groups on a
+/// GPU, whose leaders share the draws) nothing is retired.
+#[test]
+fn coherent_renders_retire_where_the_draws_follow_the_slot() {
+    use cohort::Group;
+    let base = RenderOptions {
+        algorithm: Algorithm::parse("warp").unwrap(),
+        budget: Budget::PathsPerPixel(6),
+        size: Some((32, 32)),
+        seed: 9,
+        compact: false,
+        integrator: IntegratorKind::Nee,
+        ..Default::default()
+    };
+    let variants = [
+        base.clone(),
+        RenderOptions {
+            algorithm: Algorithm::parse("block_256").unwrap(),
+            group_rr: true,
+            coherent_light: true,
+            ..base.clone()
+        },
+        RenderOptions {
+            algorithm: Algorithm::parse("grid").unwrap(),
+            ..base.clone()
+        },
+        // `normal` with the group roulette: a group of one invocation, keyed by slot.
+        RenderOptions {
+            algorithm: Algorithm::NORMAL,
+            group_rr: true,
+            ..base.clone()
+        },
+    ];
+    for kind in BACKENDS {
+        let Some(dev) = Device::for_tests(kind) else {
+            continue;
+        };
+        for opts in &variants {
+            let kept = RenderOptions {
+                retire: false,
+                ..opts.clone()
+            };
+            let (reference, none) = render(&dev, &kept);
+            assert_eq!(none, 0.0, "a render told to keep its slots retired some");
+            let (retiring, compact_time) = render(&dev, opts);
+            let what = format!("{}, {}", kind.name(), opts.algorithm.name());
+            let per_lane = kind == BackendKind::Cpu;
+            let retires = match opts.algorithm.group {
+                Group::Warp | Group::Block(_) => per_lane,
+                _ => true,
+            };
+            assert_eq!(
+                compact_time > 0.0,
+                retires,
+                "{what}: retired {compact_time} s"
+            );
+            let differ = reference
+                .iter()
+                .zip(&retiring)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differ, 0, "{what}: {differ} pixels differ");
+        }
+    }
+}
