@@ -34,13 +34,13 @@ python3 - "$tmp/runs" <<'EOF'
 import re, statistics, sys
 runs = {}
 for line in open(sys.argv[1]):
-    _, _, binary, scene, rest = line.split(" ", 4)
+    _, _, entry, scene, rest = line.split(" ", 4)
     total = float(re.search(r"kernel time\s+([\d.]+) ms", rest).group(1))
     stages = dict((k, float(v)) for k, v in re.findall(r"(\w+) ([\d.]+)", rest.split(":", 1)[1]))
     t, e, sh = stages["traverse"], stages["extend"], stages["shadow"]
-    runs.setdefault((scene, binary), []).append((total, t, e, sh, e / (t + sh)))
+    runs.setdefault((scene, entry), []).append((total, t, e, sh, e / (t + sh)))
 print("medians, ms")
-for (scene, binary), v in sorted(runs.items()):
+for (scene, entry), v in sorted(runs.items()):
     med = [statistics.median(x[i] for x in v) for i in range(5)]
-    print(f"{scene:14} {binary:28} n={len(v)} total={med[0]:.0f} traverse={med[1]:.0f} extend={med[2]:.0f} shadow={med[3]:.0f} extend/(traverse+shadow)={med[4]:.3f}")
+    print(f"{scene:14} {entry:28} n={len(v)} total={med[0]:.0f} traverse={med[1]:.0f} extend={med[2]:.0f} shadow={med[3]:.0f} extend/(traverse+shadow)={med[4]:.3f}")
 EOF
