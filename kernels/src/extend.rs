@@ -10,7 +10,7 @@
 use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
-use crate::group_draw::{glossy_cell_draw, light_draw, patch_key, roulette_draw};
+use crate::group_draw::{glossy_cell_draw, light_draw, patch_key, roulette_draw, TABLE_STRIDE};
 use crate::integrator::Integrator;
 use crate::layout::*;
 use crate::light::{
@@ -300,6 +300,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     nee: &mut [Vec4],
     flags: &mut [u32],
     completed: &[AtomicU32],
+    group_table: &[UVec4],
 ) {
     // What the scene shades with (`crate::shading`): a test below on a kind or feature
     // that the scene lacks is false when the kernel is built, and its branch is left out.
@@ -314,7 +315,11 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // With `SHADES_SLOT_GROUPS` each invocation computes them for the group of the slot
     // it shades instead (`crate::group_draw`): the same numbers while the list holds
     // every slot in order, and still the slot's own once finished slots have left it.
+    // With `SHADES_GROUP_TABLE` as well, they read them from `group_table`, where
+    // `draw_groups` computed each group's once for this iteration (two entries a group,
+    // `crate::group_draw::TABLE_STRIDE`).
     let slot_groups = shading & SHADES_SLOT_GROUPS != 0;
+    let tabled = shading & SHADES_GROUP_TABLE != 0;
     let mut slot_group = 0u32;
     if slot_groups && gi < count[0] {
         slot_group = idrays[gi as usize] / f.group_slots;
@@ -322,7 +327,9 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // The patch is drawn only for a sampler that reads it (`DiffuseSampler::GROUP_VALUE`).
     let mut shared_patch = 0u32;
     if S::GROUP_VALUE {
-        if slot_groups {
+        if tabled {
+            shared_patch = group_table[(TABLE_STRIDE * slot_group) as usize].x;
+        } else if slot_groups {
             shared_patch = S::group_value(patch_key(f, slot_group), f.patches_n);
         } else {
             shared_patch = group_share(|group| S::group_value(patch_key(f, group), f.patches_n));
@@ -338,7 +345,14 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut shared_cell = 0u32;
     let mut shared_light = Vec2::new(0.0, 0.0);
     if E::WHOLE_GROUP || shading & SHADES_GROUP_DRAWS != 0 {
-        if slot_groups {
+        if tabled {
+            let at = (TABLE_STRIDE * slot_group) as usize;
+            let t = group_table[at];
+            shared_cell = t.y;
+            shared_rr = Vec2::new(f32::from_bits(t.z), f32::from_bits(t.w));
+            let l = group_table[at + 1];
+            shared_light = Vec2::new(f32::from_bits(l.x), f32::from_bits(l.y));
+        } else if slot_groups {
             shared_rr = roulette_draw(f, slot_group);
             shared_cell = glossy_cell_draw(f, slot_group);
             shared_light = light_draw(f, slot_group);

@@ -11,10 +11,15 @@
 //! invocation computes its group's values anyway (the CPU backend's
 //! `Spec::recompute_group_share`, and the thread level), so that coherent
 //! configurations there can retire slots as `normal` does.
+//!
+//! Where a slot group holds more than one slot, its invocations need not each compute
+//! the same draws: [`draw_groups`] computes every group's once per iteration into a
+//! table, and `extend` (`SHADES_GROUP_TABLE`) reads its slot's group's entries.
 
 use crate::layout::*;
 use crate::light::shared_light_draw;
 use crate::rng::{hash, stream, uniform};
+use crate::sampling::DiffuseSampler;
 use cohort::prelude::*;
 
 /// The key from which the diffuse sampler draws group `group`'s hemisphere patch
@@ -44,4 +49,46 @@ pub fn light_draw(f: &Frame, group: u32) -> Vec2 {
         stream(f.group_seed ^ 0x11c3, group, f.iteration, 0x4a7f),
         f.light_cells,
     )
+}
+
+/// Entries of [`draw_groups`]' table per group: the patch, the glossy cell and the
+/// roulette numbers' bits in the first, the light draw's bits in x and y of the second.
+pub const TABLE_STRIDE: u32 = 2;
+
+/// Entries of the group table of `slots` slots in groups of `group_slots`
+/// ([`draw_groups`]; at least one group, so that there is always a buffer to bind).
+pub fn table_len(slots: u32, group_slots: u32) -> usize {
+    (TABLE_STRIDE * slots.div_ceil(group_slots.max(1)).max(1)) as usize
+}
+
+/// Every slot group's draws, once per iteration, into `table` (`TABLE_STRIDE` entries
+/// per group): what `extend` reads with `SHADES_GROUP_TABLE` instead of computing its
+/// group's draws in each invocation. The CPU backend runs 16 invocations as one vector
+/// block, and computed in every block (4096 blocks for 65536 slots) the draws were what
+/// kept coherent warps slower than `normal` in `extend`; over the groups they take 128
+/// blocks (2048 warps of 32 slots), and `extend` reads two entries instead. The values
+/// are the ones `extend` would compute, bit for bit.
+#[kernel(workgroup = 64)]
+pub fn draw_groups<S: DiffuseSampler>(
+    #[builtin(global_index)] gi: u32,
+    f: &Frame,
+    table: &mut [UVec4],
+) {
+    // `gi < ceil(slots / group_slots)`, without a division.
+    if gi * f.group_slots < f.slots {
+        let mut patch = 0u32;
+        if S::GROUP_VALUE {
+            patch = S::group_value(patch_key(f, gi), f.patches_n);
+        }
+        let rr = roulette_draw(f, gi);
+        let light = light_draw(f, gi);
+        let at = (TABLE_STRIDE * gi) as usize;
+        table[at] = UVec4::new(
+            patch,
+            glossy_cell_draw(f, gi),
+            rr.x.to_bits(),
+            rr.y.to_bits(),
+        );
+        table[at + 1] = UVec4::new(light.x.to_bits(), light.y.to_bits(), 0, 0);
+    }
 }

@@ -42,12 +42,18 @@ pub const SHADES_GROUP_DRAWS: u32 = 1 << 23;
 /// `slot / Frame::group_slots`, not by the invocation's (`crate::group_draw`): the frame's
 /// `group_slots` is not 0 ([`group_draws`]).
 pub const SHADES_SLOT_GROUPS: u32 = 1 << 24;
+/// With [`SHADES_SLOT_GROUPS`], `extend` reads its group's draws from the table that
+/// `crate::group_draw::draw_groups` wrote for the iteration, rather than computing them:
+/// where groups hold more than one slot (`Frame::group_slots` > 1), so that a group's
+/// draws are computed once, not in each of its invocations.
+pub const SHADES_GROUP_TABLE: u32 = 1 << 25;
 /// The first bit of a queue's index in a set with [`SHADES_QUEUE`].
-pub const QUEUE_SHIFT: u32 = 25;
+pub const QUEUE_SHIFT: u32 = 26;
 
 /// The bits of frame `f`'s group draws, which the renderer adds to every set it builds
 /// and records `extend` with: [`SHADES_GROUP_DRAWS`] where a frame flag reads the draws it
-/// stands for, and [`SHADES_SLOT_GROUPS`] where the frame keys them by slot.
+/// stands for, [`SHADES_SLOT_GROUPS`] where the frame keys them by slot, and
+/// [`SHADES_GROUP_TABLE`] where such a group holds more than one slot.
 pub fn group_draws(f: &Frame) -> u32 {
     let mut bits = 0;
     if f.group_rr != 0 || f.coherent_glossy != 0 || f.coherent_light != 0 {
@@ -55,6 +61,9 @@ pub fn group_draws(f: &Frame) -> u32 {
     }
     if f.group_slots != 0 {
         bits |= SHADES_SLOT_GROUPS;
+    }
+    if f.group_slots > 1 {
+        bits |= SHADES_GROUP_TABLE;
     }
     bits
 }

@@ -3,14 +3,25 @@
 //! the set has `SHADES_GROUP_DRAWS` or paths end as whole groups; the sampler's patch only
 //! for a sampler that reads it. Each draw is found by the helper it calls
 //! (`fn shared_light_draw`, `fn cosine_patch` in the WGSL).
+//!
+//! The group table (`draw_groups`) holds, for every group of slots, the draws its
+//! invocations would compute themselves, on every backend, and nothing past its end.
 
+use cohort::runtime::{BackendKind, Device};
 use cohort::{Group, Spec};
 use cohort_kernels::extend::extend;
+use cohort_kernels::group_draw::{
+    draw_groups, glossy_cell_draw, light_draw, patch_key, roulette_draw, table_len, TABLE_STRIDE,
+};
 use cohort_kernels::integrator::NextEvent;
 use cohort_kernels::layout::{Frame, DIFFUSE};
 use cohort_kernels::path_end::{EachPath, WholeGroup};
-use cohort_kernels::sampling::{CoherentCosine, Cosine};
-use cohort_kernels::shading::{group_draws, kind_bit, SHADES_GROUP_DRAWS};
+use cohort_kernels::rng::uniform;
+use cohort_kernels::sampling::{CoherentCosine, CoherentEqualArea, Cosine, DiffuseSampler};
+use cohort_kernels::shading::{
+    group_draws, kind_bit, SHADES_GROUP_DRAWS, SHADES_GROUP_TABLE, SHADES_SLOT_GROUPS,
+};
+use glam::UVec4;
 
 fn has(wgsl: &str, helper: &str) -> bool {
     wgsl.lines()
@@ -60,5 +71,145 @@ fn the_frame_flags_that_read_group_draws_set_the_bit() {
         let mut f = Frame::default();
         set(&mut f);
         assert_eq!(group_draws(&f), SHADES_GROUP_DRAWS);
+    }
+    // Keyed by slot: one slot a group computes its own draws; larger groups read the table.
+    let mut f = Frame {
+        group_slots: 1,
+        ..Default::default()
+    };
+    assert_eq!(group_draws(&f), SHADES_SLOT_GROUPS);
+    f.group_slots = 32;
+    assert_eq!(group_draws(&f), SHADES_SLOT_GROUPS | SHADES_GROUP_TABLE);
+}
+
+/// With the group table, `extend` computes no group draw itself: `draw_groups` does.
+#[test]
+fn a_tabled_extend_reads_the_draws() {
+    let set = kind_bit(DIFFUSE) | SHADES_GROUP_DRAWS | SHADES_SLOT_GROUPS;
+    let coherent = extend::build::<CoherentCosine, EachPath, NextEvent>;
+    let own = wgsl(Group::Warp, set, coherent);
+    assert!(has(&own, "cosine_patch") && has(&own, "shared_light_draw"));
+    let read = wgsl(Group::Warp, set | SHADES_GROUP_TABLE, coherent);
+    assert!(!has(&read, "cosine_patch"));
+    assert!(!has(&read, "shared_light_draw"));
+}
+
+const SENTINEL: u32 = 0xDEAD_BEEF;
+
+/// The table that `draw_groups::<S>` writes for frame `f` on `d`, `slack` entries past
+/// its length left at [`SENTINEL`].
+fn table<S: DiffuseSampler>(d: &Device, f: &Frame, slack: usize) -> Vec<UVec4> {
+    let len = table_len(f.slots, f.group_slots);
+    let buf = d
+        .upload(&vec![UVec4::splat(SENTINEL); len + slack])
+        .unwrap();
+    let groups = f.slots.div_ceil(f.group_slots);
+    draw_groups::launch::<S>(d, groups, f, &buf).unwrap();
+    d.read(&buf).unwrap()
+}
+
+/// What `extend` computes for group `g` itself, as the table holds it.
+fn host_entries<S: DiffuseSampler>(f: &Frame, g: u32) -> [UVec4; 2] {
+    let patch = if S::GROUP_VALUE {
+        S::group_value(patch_key(f, g), f.patches_n)
+    } else {
+        0
+    };
+    let rr = roulette_draw(f, g);
+    let light = light_draw(f, g);
+    [
+        UVec4::new(
+            patch,
+            glossy_cell_draw(f, g),
+            rr.x.to_bits(),
+            rr.y.to_bits(),
+        ),
+        UVec4::new(light.x.to_bits(), light.y.to_bits(), 0, 0),
+    ]
+}
+
+/// The polar band of `cosine_patch`'s draw for group `g` on the host, and how far (in
+/// bands) its angle is from the nearest band edge.
+fn polar_band(f: &Frame, g: u32) -> (u32, f32) {
+    let u1 = uniform(patch_key(f, g), 0);
+    let theta = (1.0 - u1).max(0.0).sqrt().min(1.0).acos();
+    let t = theta / (std::f32::consts::FRAC_PI_2 / f.patches_n as f32);
+    ((t as u32).min(f.patches_n - 1), (t - t.round()).abs())
+}
+
+/// `exact_acos`: the backend's acos is the host's (the CPU backend), so a patch from
+/// `cosine_patch` must be the host's too; elsewhere it may be a neighbour
+/// ([`polar_band`]).
+fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
+    // Slot counts that are and are not multiples of the group, one group, and group
+    // sizes from two slots to a block; iterations, seeds, patch and light grids vary.
+    for (slots, group_slots) in [
+        (1, 32),
+        (31, 32),
+        (1000, 32),
+        (65536, 32),
+        (777, 2),
+        (4096, 256),
+    ] {
+        for (iteration, group_seed, patches_n, light_cells) in [
+            (0, 0, 4, 1),
+            (7, 0x1234_5678, 8, 3),
+            (u32::MAX, u32::MAX, 1, 16),
+        ] {
+            let f = Frame {
+                slots,
+                group_slots,
+                iteration,
+                group_seed,
+                patches_n,
+                light_cells,
+                ..Default::default()
+            };
+            let got = table::<S>(d, &f, 8);
+            let len = table_len(slots, group_slots);
+            let what =
+                format!("{name}: {slots} slots in groups of {group_slots}, iteration {iteration}");
+            for g in 0..slots.div_ceil(group_slots) {
+                let at = (TABLE_STRIDE * g) as usize;
+                let mut want = host_entries::<S>(&f, g);
+                if exact_acos || want[0].x == got[at].x {
+                    assert_eq!(got[at..at + 2], want, "{what}, group {g}");
+                    continue;
+                }
+                // A GPU's acos is not the host's: `cosine_patch` may pick the
+                // neighbouring polar band where the angle is within its error of an edge.
+                let (band, edge) = polar_band(&f, g);
+                let (m, p) = (4 * patches_n, got[at].x);
+                assert!(
+                    p % m == want[0].x % m && (p / m).abs_diff(band) == 1 && edge < 1e-4,
+                    "{what}, group {g}: patch {p}, the host's {} ({edge} from an edge)",
+                    want[0].x
+                );
+                want[0].x = p;
+                assert_eq!(got[at..at + 2], want, "{what}, group {g}");
+            }
+            assert!(
+                got[len..].iter().all(|&e| e == UVec4::splat(SENTINEL)),
+                "{what}: written past the table"
+            );
+        }
+    }
+}
+
+/// `draw_groups` writes, on every backend, the draws each group's invocations would
+/// compute themselves, for samplers with and without a patch: bit for bit against the
+/// host, except that a GPU's acos may put `cosine_patch`'s angle in the neighbouring
+/// polar band where it lies within 1e-4 of a band's width from the edge.
+#[test]
+fn the_group_table_holds_the_draws_of_each_group() {
+    for kind in [BackendKind::Cpu, BackendKind::Vulkan, BackendKind::Wgpu] {
+        let Some(d) = Device::for_tests(kind) else {
+            continue;
+        };
+        let exact = kind == BackendKind::Cpu;
+        check_table::<CoherentCosine>(&d, kind.name(), exact);
+        // Equal-area patches and `Cosine`'s lack of one are integers: exact everywhere.
+        check_table::<CoherentEqualArea>(&d, kind.name(), true);
+        check_table::<Cosine>(&d, kind.name(), true);
     }
 }

@@ -8,11 +8,13 @@
 use cohort::runtime::{Batch, GpuBuffer};
 use cohort::Grid;
 use cohort_kernels::extend::extend;
+use cohort_kernels::group_draw::draw_groups;
 use cohort_kernels::integrator::Integrator;
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::PathEnd;
 use cohort_kernels::reorder;
 use cohort_kernels::sampling::DiffuseSampler;
+use cohort_kernels::shading::SHADES_GROUP_TABLE;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_kernels::{compact, queues, retire};
@@ -228,6 +230,9 @@ impl<'a> Wavefront<'a> {
         let Some(q) = p.queues.as_ref().filter(|_| self.queues) else {
             let all = Grid::Threads(self.listed);
             let set = extend_set(s, self.frame);
+            if set & SHADES_GROUP_TABLE != 0 {
+                self.draw_groups::<S>(b)?;
+            }
             return self.shade::<S, E, I>(b, all, set, count, live);
         };
         b.stage(Stage::Queue, |b| {
@@ -252,6 +257,16 @@ impl<'a> Wavefront<'a> {
             self.shade::<S, E, I>(b, grid, set, &q.queued, &q.out)?;
         }
         Ok(())
+    }
+
+    /// Every slot group's draws of this iteration into the group table that `extend`
+    /// reads with `SHADES_GROUP_TABLE` (`cohort_kernels::group_draw::draw_groups`).
+    fn draw_groups<S: DiffuseSampler>(&self, b: &mut LabelledBatch<'_>) -> Result<(), RenderError> {
+        let f = self.frame;
+        let groups = f.slots.div_ceil(f.group_slots);
+        b.stage(Stage::Extend, |b| {
+            draw_groups::record::<S>(b, &self.specs.groups, groups, f, &self.paths.group_table)
+        })
     }
 
     /// One `extend` built with `set`, over `grid`, for the rays that `count` and `list`
@@ -294,6 +309,7 @@ impl<'a> Wavefront<'a> {
                 &p.nee,
                 &p.flags,
                 &p.counters,
+                &p.group_table,
             )
         })
     }

@@ -9,13 +9,14 @@ use std::time::{Duration, Instant};
 use cohort::runtime::{BackendKind, Device, KernelArtifact};
 use cohort_kernels::compact;
 use cohort_kernels::extend::{extend, init_paths};
+use cohort_kernels::group_draw::{self, draw_groups};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::{EachPath, PathEnd, WholeGroup};
 use cohort_kernels::sampling::{
     CoherentCosine, CoherentEqualArea, CoherentUniform, Cosine, DiffuseSampler,
 };
-use cohort_kernels::shading::group_draws;
+use cohort_kernels::shading::{group_draws, SHADES_GROUP_TABLE};
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
 use cohort_kernels::{queues, reorder, retire};
@@ -67,6 +68,8 @@ pub(crate) struct Specs {
     pub(crate) live: cohort::Spec,
     pub(crate) reorder: reorder::Specs,
     pub(crate) queues: queues::Specs,
+    /// `cohort_kernels::group_draw::draw_groups`.
+    pub(crate) groups: cohort::Spec,
 }
 
 /// An operation over the kernel types of a set of options (see [`with_types`]).
@@ -128,6 +131,7 @@ impl Specs {
             live: retire::spec(d),
             reorder: reorder::specs(d),
             queues: queues::specs(d),
+            groups: draw_groups::spec(d, None),
         }
     }
 }
@@ -183,6 +187,12 @@ impl Renderer<'_> {
         self.startup.kernels = compiled.kernels;
         if self.opts.reorder > 0 && self.paths.sort.is_none() {
             self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
+        }
+        if shading & SHADES_GROUP_TABLE != 0 {
+            let len = group_draw::table_len(self.frame.slots, self.frame.group_slots);
+            if self.paths.group_table.len() < len {
+                self.paths.group_table = d.alloc(len)?;
+            }
         }
         // The queues' dispatches are sized for the group level's workgroup.
         let wgs = specs.extend.workgroup_size;
@@ -288,6 +298,11 @@ impl TypedOp for Compile<'_> {
                 Ok(vec![extend::artifact::<S, E, I>(&extend::specialized(
                     spec, set,
                 ))?])
+            }));
+        }
+        if shading & SHADES_GROUP_TABLE != 0 {
+            builds.push(Box::new(|| {
+                Ok(vec![draw_groups::artifact::<S>(&specs.groups)?])
             }));
         }
         if queued {

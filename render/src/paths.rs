@@ -2,7 +2,7 @@
 //! and ray reordering's buffers ([`SortState`]).
 
 use cohort::runtime::{Device, GpuBuffer};
-use cohort_kernels::{compact, reorder};
+use cohort_kernels::{compact, group_draw, reorder};
 use cohort_scenes::Camera;
 use glam::{UVec4, Vec4};
 
@@ -40,6 +40,10 @@ pub(crate) struct Paths {
     pub(crate) total: GpuBuffer<u32>,
     /// [completed paths, slots done]
     pub(crate) counters: GpuBuffer<u32>,
+    /// Each slot group's draws of the iteration (`cohort_kernels::group_draw::draw_groups`),
+    /// sized by the first run whose `extend` reads them (`SHADES_GROUP_TABLE`); one
+    /// unread group before, which `extend` binds all the same.
+    pub(crate) group_table: GpuBuffer<UVec4>,
 }
 
 impl Paths {
@@ -76,6 +80,7 @@ impl Paths {
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
+            group_table: device.alloc(group_draw::table_len(1, 1))?,
         })
     }
 }

@@ -85,6 +85,7 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
     use cohort_kernels::display::display;
     use cohort_kernels::extend::{extend, init_paths};
+    use cohort_kernels::group_draw::draw_groups;
     use cohort_kernels::integrator::{Implicit, NextEvent};
     use cohort_kernels::layout::DIFFUSE;
     use cohort_kernels::path_end::{EachPath, WholeGroup};
@@ -92,7 +93,9 @@ fn renderer_variants() -> Vec<variants::Variant> {
     use cohort_kernels::reorder::{bin_clear, bin_count, bin_offsets, bin_scatter};
     use cohort_kernels::retire::mark_live;
     use cohort_kernels::sampling::{CoherentCosine, Cosine};
-    use cohort_kernels::shading::{kind_bit, queue_set, SHADES_ALL};
+    use cohort_kernels::shading::{
+        kind_bit, queue_set, SHADES_ALL, SHADES_GROUP_TABLE, SHADES_SLOT_GROUPS,
+    };
     use cohort_kernels::traverse::{trace_shadow, traverse};
     use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
     fn variant(
@@ -248,6 +251,21 @@ fn renderer_variants() -> Vec<variants::Variant> {
             Group::Warp,
             &[SHADES_ALL],
             extend::build::<CoherentCosine, WholeGroup, Implicit>,
+        ),
+        // Coherent warps as the CPU backend renders them: each group's draws computed
+        // once an iteration into the group table, which `extend` reads by slot.
+        variant(
+            "draw_groups_coherent",
+            &draw_groups::INFO,
+            Group::Thread,
+            draw_groups::build::<CoherentCosine>,
+        ),
+        specialized(
+            "extend_coherent_nee_diffuse_tabled",
+            &extend::INFO,
+            Group::Warp,
+            &[kind_bit(DIFFUSE) | SHADES_SLOT_GROUPS | SHADES_GROUP_TABLE],
+            extend::build::<CoherentCosine, EachPath, NextEvent>,
         ),
     ]
 }
