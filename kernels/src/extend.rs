@@ -10,7 +10,10 @@
 use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
-use crate::group_draw::{glossy_cell_draw, light_draw, patch_key, roulette_draw, TABLE_STRIDE};
+use crate::group_draw::{
+    draws_entry, glossy_cell_draw, is_group, light_draw, light_entry, patch_key, roulette_draw,
+    table_at,
+};
 use crate::integrator::Integrator;
 use crate::layout::*;
 use crate::light::{
@@ -300,7 +303,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     nee: &mut [Vec4],
     flags: &mut [u32],
     completed: &[AtomicU32],
-    group_table: &[UVec4],
+    group_table: &mut [UVec4],
 ) {
     // What the scene shades with (`crate::shading`): a test below on a kind or feature
     // that the scene lacks is false when the kernel is built, and its branch is left out.
@@ -315,24 +318,33 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     // With `SHADES_SLOT_GROUPS` each invocation computes them for the group of the slot
     // it shades instead (`crate::group_draw`): the same numbers while the list holds
     // every slot in order, and still the slot's own once finished slots have left it.
-    // With `SHADES_GROUP_TABLE` as well, they read them from `group_table`, where
-    // `draw_groups` computed each group's once for this iteration (two entries a group,
-    // `crate::group_draw::TABLE_STRIDE`).
+    // With `SHADES_GROUP_TABLE` as well, they read them from `group_table`, where each
+    // group's were computed once for this iteration (`crate::group_draw`), and the
+    // invocations of the first `ceil(slots / group_slots)` indices compute the next
+    // iteration's into its other half (the renderer dispatches at least that many).
     let slot_groups = shading & SHADES_SLOT_GROUPS != 0;
     let tabled = shading & SHADES_GROUP_TABLE != 0;
     let mut slot_group = 0u32;
     if slot_groups && gi < count[0] {
         slot_group = idrays[gi as usize] / f.group_slots;
     }
+    if tabled {
+        if is_group(f, gi) {
+            let next = table_at(f, gi, f.iteration + 1);
+            group_table[next] = draws_entry::<S>(f, gi, f.iteration + 1);
+            group_table[next + 1] = light_entry(f, gi, f.iteration + 1);
+        }
+    }
     // The patch is drawn only for a sampler that reads it (`DiffuseSampler::GROUP_VALUE`).
     let mut shared_patch = 0u32;
     if S::GROUP_VALUE {
         if tabled {
-            shared_patch = group_table[(TABLE_STRIDE * slot_group) as usize].x;
+            shared_patch = group_table[table_at(f, slot_group, f.iteration)].x;
         } else if slot_groups {
-            shared_patch = S::group_value(patch_key(f, slot_group), f.patches_n);
+            shared_patch = S::group_value(patch_key(f, slot_group, f.iteration), f.patches_n);
         } else {
-            shared_patch = group_share(|group| S::group_value(patch_key(f, group), f.patches_n));
+            shared_patch =
+                group_share(|group| S::group_value(patch_key(f, group, f.iteration), f.patches_n));
         }
     }
     // The configuration's own group draws: the Russian-roulette number of `_rr` and of
@@ -346,22 +358,22 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut shared_light = Vec2::new(0.0, 0.0);
     if E::WHOLE_GROUP || shading & SHADES_GROUP_DRAWS != 0 {
         if tabled {
-            let at = (TABLE_STRIDE * slot_group) as usize;
-            let t = group_table[at];
+            let drawn = table_at(f, slot_group, f.iteration);
+            let t = group_table[drawn];
             shared_cell = t.y;
             shared_rr = Vec2::new(f32::from_bits(t.z), f32::from_bits(t.w));
-            let l = group_table[at + 1];
+            let l = group_table[drawn + 1];
             shared_light = Vec2::new(f32::from_bits(l.x), f32::from_bits(l.y));
         } else if slot_groups {
-            shared_rr = roulette_draw(f, slot_group);
-            shared_cell = glossy_cell_draw(f, slot_group);
-            shared_light = light_draw(f, slot_group);
+            shared_rr = roulette_draw(f, slot_group, f.iteration);
+            shared_cell = glossy_cell_draw(f, slot_group, f.iteration);
+            shared_light = light_draw(f, slot_group, f.iteration);
         } else {
             // x: the group's Russian-roulette number (`_rr`); y: its whole-group-end number.
-            shared_rr = group_share(|group| roulette_draw(f, group));
-            shared_cell = group_share(|group| glossy_cell_draw(f, group));
+            shared_rr = group_share(|group| roulette_draw(f, group, f.iteration));
+            shared_cell = group_share(|group| glossy_cell_draw(f, group, f.iteration));
             // Coherent light sampling: the group's light pick and stratum.
-            shared_light = group_share(|group| light_draw(f, group));
+            shared_light = group_share(|group| light_draw(f, group, f.iteration));
         }
     }
     // Phase 1: shade and decide per path. What phase 2 needs outlives the branch, because

@@ -22,73 +22,108 @@ use crate::rng::{hash, stream, uniform};
 use crate::sampling::DiffuseSampler;
 use cohort::prelude::*;
 
-/// The key from which the diffuse sampler draws group `group`'s hemisphere patch
-/// (`DiffuseSampler::group_value`).
+/// The key from which the diffuse sampler draws group `group`'s hemisphere patch at
+/// iteration `iteration` (`DiffuseSampler::group_value`).
 #[kernel_fn]
-pub fn patch_key(f: &Frame, group: u32) -> u32 {
-    stream(f.group_seed, group, f.iteration, 0x5eed)
+pub fn patch_key(f: &Frame, group: u32, iteration: u32) -> u32 {
+    stream(f.group_seed, group, iteration, 0x5eed)
 }
 
-/// Group `group`'s Russian-roulette numbers: x for `group_rr`, y for whole-group ends.
+/// Group `group`'s Russian-roulette numbers at `iteration`: x for `group_rr`, y for
+/// whole-group ends.
 #[kernel_fn]
-pub fn roulette_draw(f: &Frame, group: u32) -> Vec2 {
-    let k = stream(f.group_seed ^ 0x2b5e, group, f.iteration, 0x7a11);
+pub fn roulette_draw(f: &Frame, group: u32, iteration: u32) -> Vec2 {
+    let k = stream(f.group_seed ^ 0x2b5e, group, iteration, 0x7a11);
     Vec2::new(uniform(k, 0), uniform(k, 1))
 }
 
-/// Group `group`'s cell of coherent glossy sampling (before the modulo by the cells).
+/// Group `group`'s cell of coherent glossy sampling at `iteration` (before the modulo by
+/// the cells).
 #[kernel_fn]
-pub fn glossy_cell_draw(f: &Frame, group: u32) -> u32 {
-    hash(stream(f.group_seed ^ 0x61c8, group, f.iteration, 0x9e37))
+pub fn glossy_cell_draw(f: &Frame, group: u32, iteration: u32) -> u32 {
+    hash(stream(f.group_seed ^ 0x61c8, group, iteration, 0x9e37))
 }
 
-/// Group `group`'s light pick and stratum of coherent light sampling.
+/// Group `group`'s light pick and stratum of coherent light sampling at `iteration`.
 #[kernel_fn]
-pub fn light_draw(f: &Frame, group: u32) -> Vec2 {
+pub fn light_draw(f: &Frame, group: u32, iteration: u32) -> Vec2 {
     shared_light_draw(
-        stream(f.group_seed ^ 0x11c3, group, f.iteration, 0x4a7f),
+        stream(f.group_seed ^ 0x11c3, group, iteration, 0x4a7f),
         f.light_cells,
     )
 }
 
-/// Entries of [`draw_groups`]' table per group: the patch, the glossy cell and the
-/// roulette numbers' bits in the first, the light draw's bits in x and y of the second.
+/// Entries of the group table per group and iteration: the patch, the glossy cell and
+/// the roulette numbers' bits in the first ([`draws_entry`]), the light draw's bits in x
+/// and y of the second ([`light_entry`]).
 pub const TABLE_STRIDE: u32 = 2;
 
-/// Entries of the group table of `slots` slots in groups of `group_slots`
-/// ([`draw_groups`]; at least one group, so that there is always a buffer to bind).
+/// Entries of the group table of `slots` slots in groups of `group_slots`: two halves,
+/// one per iteration parity ([`table_at`]; at least one group, so that there is always a
+/// buffer to bind).
 pub fn table_len(slots: u32, group_slots: u32) -> usize {
-    (TABLE_STRIDE * slots.div_ceil(group_slots.max(1)).max(1)) as usize
+    (2 * TABLE_STRIDE * slots.div_ceil(group_slots.max(1)).max(1)) as usize
 }
 
-/// Every slot group's draws, once per iteration, into `table` (`TABLE_STRIDE` entries
-/// per group): what `extend` reads with `SHADES_GROUP_TABLE` instead of computing its
-/// group's draws in each invocation. The CPU backend runs 16 invocations as one vector
-/// block, and computed in every block (4096 blocks for 65536 slots) the draws were what
-/// kept coherent warps slower than `normal` in `extend`; over the groups they take 128
-/// blocks (2048 warps of 32 slots), and `extend` reads two entries instead. The values
-/// are the ones `extend` would compute, bit for bit.
+/// Whether `group` is one of frame `f`'s slot groups: `group < ceil(slots / group_slots)`,
+/// without a division.
+#[kernel_fn]
+pub fn is_group(f: &Frame, group: u32) -> bool {
+    group * f.group_slots < f.slots
+}
+
+/// Where group `group`'s entries for iteration `iteration` start in the group table: in
+/// the half of the iteration's parity, so that `extend` can write the next iteration's
+/// draws while it reads this one's.
+#[kernel_fn]
+pub fn table_at(f: &Frame, group: u32, iteration: u32) -> usize {
+    let groups = (f.slots + f.group_slots - 1) / f.group_slots;
+    (TABLE_STRIDE * ((iteration % 2) * groups + group)) as usize
+}
+
+/// Group `group`'s first table entry at `iteration`: its patch (0 for a sampler without
+/// one), its glossy cell and its roulette numbers' bits.
+#[kernel_fn]
+pub fn draws_entry<S: DiffuseSampler>(f: &Frame, group: u32, iteration: u32) -> UVec4 {
+    let mut patch = 0u32;
+    if S::GROUP_VALUE {
+        patch = S::group_value(patch_key(f, group, iteration), f.patches_n);
+    }
+    let rr = roulette_draw(f, group, iteration);
+    UVec4::new(
+        patch,
+        glossy_cell_draw(f, group, iteration),
+        rr.x.to_bits(),
+        rr.y.to_bits(),
+    )
+}
+
+/// Group `group`'s second table entry at `iteration`: its light draw's bits.
+#[kernel_fn]
+pub fn light_entry(f: &Frame, group: u32, iteration: u32) -> UVec4 {
+    let light = light_draw(f, group, iteration);
+    UVec4::new(light.x.to_bits(), light.y.to_bits(), 0, 0)
+}
+
+/// Every slot group's draws of the frame's iteration into its half of `table`: what
+/// `extend` reads with `SHADES_GROUP_TABLE` instead of computing its group's draws in
+/// each invocation. The CPU backend runs 16 invocations as one vector block, and
+/// computed in every block (4096 blocks for 65536 slots) the draws were what kept
+/// coherent warps slower than `normal` in `extend`; over the groups they take 128 blocks
+/// (2048 warps of 32 slots). The renderer dispatches this once, for a run's first
+/// iteration: from then on each `extend` writes the next iteration's draws into the
+/// other half beside its work, which spares a dispatch per iteration (about 40 us each on
+/// two cores, more than the draws themselves). The values are the ones `extend` would
+/// compute, bit for bit.
 #[kernel(workgroup = 64)]
 pub fn draw_groups<S: DiffuseSampler>(
     #[builtin(global_index)] gi: u32,
     f: &Frame,
     table: &mut [UVec4],
 ) {
-    // `gi < ceil(slots / group_slots)`, without a division.
-    if gi * f.group_slots < f.slots {
-        let mut patch = 0u32;
-        if S::GROUP_VALUE {
-            patch = S::group_value(patch_key(f, gi), f.patches_n);
-        }
-        let rr = roulette_draw(f, gi);
-        let light = light_draw(f, gi);
-        let at = (TABLE_STRIDE * gi) as usize;
-        table[at] = UVec4::new(
-            patch,
-            glossy_cell_draw(f, gi),
-            rr.x.to_bits(),
-            rr.y.to_bits(),
-        );
-        table[at + 1] = UVec4::new(light.x.to_bits(), light.y.to_bits(), 0, 0);
+    if is_group(f, gi) {
+        let at = table_at(f, gi, f.iteration);
+        table[at] = draws_entry::<S>(f, gi, f.iteration);
+        table[at + 1] = light_entry(f, gi, f.iteration);
     }
 }

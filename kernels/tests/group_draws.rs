@@ -11,7 +11,7 @@ use cohort::runtime::{BackendKind, Device};
 use cohort::{Group, Spec};
 use cohort_kernels::extend::extend;
 use cohort_kernels::group_draw::{
-    draw_groups, glossy_cell_draw, light_draw, patch_key, roulette_draw, table_len, TABLE_STRIDE,
+    draw_groups, draws_entry, light_entry, patch_key, table_at, table_len, TABLE_STRIDE,
 };
 use cohort_kernels::integrator::NextEvent;
 use cohort_kernels::layout::{Frame, DIFFUSE};
@@ -82,16 +82,25 @@ fn the_frame_flags_that_read_group_draws_set_the_bit() {
     assert_eq!(group_draws(&f), SHADES_SLOT_GROUPS | SHADES_GROUP_TABLE);
 }
 
-/// With the group table, `extend` computes no group draw itself: `draw_groups` does.
+/// With the group table, `extend` reads its group's draws from the table and writes the
+/// next iteration's there; without it, the table is not in the kernel at all.
 #[test]
-fn a_tabled_extend_reads_the_draws() {
+fn a_tabled_extend_reads_and_writes_the_table() {
     let set = kind_bit(DIFFUSE) | SHADES_GROUP_DRAWS | SHADES_SLOT_GROUPS;
     let coherent = extend::build::<CoherentCosine, EachPath, NextEvent>;
     let own = wgsl(Group::Warp, set, coherent);
-    assert!(has(&own, "cosine_patch") && has(&own, "shared_light_draw"));
-    let read = wgsl(Group::Warp, set | SHADES_GROUP_TABLE, coherent);
-    assert!(!has(&read, "cosine_patch"));
-    assert!(!has(&read, "shared_light_draw"));
+    assert!(!own.contains("group_table"));
+    let tabled = wgsl(Group::Warp, set | SHADES_GROUP_TABLE, coherent);
+    let reads = tabled
+        .lines()
+        .filter(|l| l.contains("= group_table["))
+        .count();
+    let writes = tabled
+        .lines()
+        .filter(|l| l.trim_start().starts_with("group_table["))
+        .count();
+    assert!(reads >= 3 && writes == 2, "{reads} reads, {writes} writes");
+    assert!(tabled.contains("var<storage, read_write> group_table"));
 }
 
 const SENTINEL: u32 = 0xDEAD_BEEF;
@@ -108,30 +117,19 @@ fn table<S: DiffuseSampler>(d: &Device, f: &Frame, slack: usize) -> Vec<UVec4> {
     d.read(&buf).unwrap()
 }
 
-/// What `extend` computes for group `g` itself, as the table holds it.
+/// What `extend` computes for group `g` itself at the frame's iteration, as the table
+/// holds it: the kernel functions, run on the host.
 fn host_entries<S: DiffuseSampler>(f: &Frame, g: u32) -> [UVec4; 2] {
-    let patch = if S::GROUP_VALUE {
-        S::group_value(patch_key(f, g), f.patches_n)
-    } else {
-        0
-    };
-    let rr = roulette_draw(f, g);
-    let light = light_draw(f, g);
     [
-        UVec4::new(
-            patch,
-            glossy_cell_draw(f, g),
-            rr.x.to_bits(),
-            rr.y.to_bits(),
-        ),
-        UVec4::new(light.x.to_bits(), light.y.to_bits(), 0, 0),
+        draws_entry::<S>(f, g, f.iteration),
+        light_entry(f, g, f.iteration),
     ]
 }
 
 /// The polar band of `cosine_patch`'s draw for group `g` on the host, and how far (in
 /// bands) its angle is from the nearest band edge.
 fn polar_band(f: &Frame, g: u32) -> (u32, f32) {
-    let u1 = uniform(patch_key(f, g), 0);
+    let u1 = uniform(patch_key(f, g, f.iteration), 0);
     let theta = (1.0 - u1).max(0.0).sqrt().min(1.0).acos();
     let t = theta / (std::f32::consts::FRAC_PI_2 / f.patches_n as f32);
     ((t as u32).min(f.patches_n - 1), (t - t.round()).abs())
@@ -142,7 +140,8 @@ fn polar_band(f: &Frame, g: u32) -> (u32, f32) {
 /// ([`polar_band`]).
 fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
     // Slot counts that are and are not multiples of the group, one group, and group
-    // sizes from two slots to a block; iterations, seeds, patch and light grids vary.
+    // sizes from two slots to a block; iterations of both parities (the table's halves),
+    // seeds, patch and light grids vary.
     for (slots, group_slots) in [
         (1, 32),
         (31, 32),
@@ -154,7 +153,7 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
         for (iteration, group_seed, patches_n, light_cells) in [
             (0, 0, 4, 1),
             (7, 0x1234_5678, 8, 3),
-            (u32::MAX, u32::MAX, 1, 16),
+            (u32::MAX - 1, u32::MAX, 1, 16),
         ] {
             let f = Frame {
                 slots,
@@ -167,10 +166,12 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
             };
             let got = table::<S>(d, &f, 8);
             let len = table_len(slots, group_slots);
+            let groups = slots.div_ceil(group_slots);
             let what =
                 format!("{name}: {slots} slots in groups of {group_slots}, iteration {iteration}");
-            for g in 0..slots.div_ceil(group_slots) {
-                let at = (TABLE_STRIDE * g) as usize;
+            for g in 0..groups {
+                let at = table_at(&f, g, iteration);
+                assert_eq!(at, (TABLE_STRIDE * ((iteration % 2) * groups + g)) as usize);
                 let mut want = host_entries::<S>(&f, g);
                 if exact_acos || want[0].x == got[at].x {
                     assert_eq!(got[at..at + 2], want, "{what}, group {g}");
@@ -188,6 +189,15 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
                 want[0].x = p;
                 assert_eq!(got[at..at + 2], want, "{what}, group {g}");
             }
+            // The other iteration parity's half, and past the table, stay untouched.
+            let other = table_at(&f, 0, iteration + 1);
+            let half = (TABLE_STRIDE * groups) as usize;
+            assert!(
+                got[other..other + half]
+                    .iter()
+                    .all(|&e| e == UVec4::splat(SENTINEL)),
+                "{what}: written into the other half"
+            );
             assert!(
                 got[len..].iter().all(|&e| e == UVec4::splat(SENTINEL)),
                 "{what}: written past the table"

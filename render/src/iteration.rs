@@ -90,6 +90,9 @@ pub(crate) struct Wavefront<'a> {
     /// At least the entries of the current list (the slots, or fewer once finished
     /// slots are retired): every stage's grid.
     pub(crate) listed: u32,
+    /// Whether the group table already holds this iteration's draws, written by the
+    /// previous iteration's `extend` (`cohort_kernels::group_draw`).
+    pub(crate) tabled: bool,
 }
 
 impl<'a> Wavefront<'a> {
@@ -228,10 +231,14 @@ impl<'a> Wavefront<'a> {
     ) -> Result<(), RenderError> {
         let (s, p) = (self.scene, self.paths);
         let Some(q) = p.queues.as_ref().filter(|_| self.queues) else {
-            let all = Grid::Threads(self.listed);
             let set = extend_set(s, self.frame);
+            let mut all = Grid::Threads(self.listed);
             if set & SHADES_GROUP_TABLE != 0 {
-                self.draw_groups::<S>(b)?;
+                if !self.tabled {
+                    self.draw_groups::<S>(b)?;
+                }
+                // Every group's invocation writes its next draws, listed or not.
+                all = Grid::Threads(self.listed.max(self.groups()));
             }
             return self.shade::<S, E, I>(b, all, set, count, live);
         };
@@ -259,13 +266,24 @@ impl<'a> Wavefront<'a> {
         Ok(())
     }
 
+    /// The slot groups of the frame's group table (`Frame::group_slots` > 1).
+    fn groups(&self) -> u32 {
+        self.frame.slots.div_ceil(self.frame.group_slots)
+    }
+
     /// Every slot group's draws of this iteration into the group table that `extend`
-    /// reads with `SHADES_GROUP_TABLE` (`cohort_kernels::group_draw::draw_groups`).
+    /// reads with `SHADES_GROUP_TABLE` (`cohort_kernels::group_draw::draw_groups`): for
+    /// a run's first iteration, after which each `extend` writes the next one's.
     fn draw_groups<S: DiffuseSampler>(&self, b: &mut LabelledBatch<'_>) -> Result<(), RenderError> {
         let f = self.frame;
-        let groups = f.slots.div_ceil(f.group_slots);
         b.stage(Stage::Extend, |b| {
-            draw_groups::record::<S>(b, &self.specs.groups, groups, f, &self.paths.group_table)
+            draw_groups::record::<S>(
+                b,
+                &self.specs.groups,
+                self.groups(),
+                f,
+                &self.paths.group_table,
+            )
         })
     }
 

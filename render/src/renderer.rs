@@ -67,6 +67,9 @@ struct Run {
     per_iteration: Option<f64>,
     /// The design of the run's batches, a trial until both are measured.
     design: Choice,
+    /// The iteration whose group draws the group table holds, written by the `extend`
+    /// recorded last (`cohort_kernels::group_draw`); `None` before the run's first.
+    tabled: Option<u32>,
 }
 
 /// A submitted batch of iterations and what its results are read into.
@@ -386,6 +389,7 @@ impl<'d> Renderer<'d> {
             listed: n,
             per_iteration: None,
             design: self.design.clone(),
+            tabled: None,
         });
         Ok(())
     }
@@ -522,6 +526,7 @@ impl<'d> Renderer<'d> {
                         reorder_every: self.opts.reorder,
                         queues: queued_batch,
                         listed: run.listed,
+                        tabled: run.tabled == Some(self.frame.iteration),
                     };
                     // Once at most three quarters of the listed slots are live, list only
                     // those: the slots finished since the last read-back stay listed (and
@@ -536,6 +541,7 @@ impl<'d> Renderer<'d> {
                         wavefront.listed = run.listed;
                     }
                     run.cur = wavefront.record_iteration::<S, E, I>(&mut b, run.cur)?;
+                    run.tabled = Some(self.frame.iteration + 1);
                 }
                 let LabelledBatch { mut batch, stages } = b;
                 let counters = batch.read_back(&p.counters)?;
@@ -704,19 +710,31 @@ mod tests {
     }
 
     /// Slices of a run give the image of one render: batching does not change which
-    /// paths are traced, only when the host looks.
+    /// paths are traced, only when the host looks. On the CPU backend, warp groups read
+    /// their draws from the group table, which each `extend` fills for the next
+    /// iteration, across slices too.
     #[test]
     fn a_run_in_slices_renders_what_one_render_does() {
-        let Some(d) = Device::for_tests(BackendKind::Vulkan) else {
-            return;
-        };
+        // The CPU run without compaction, which keys group draws by list place.
+        for (kind, compact) in [(BackendKind::Vulkan, true), (BackendKind::Cpu, false)] {
+            if let Some(d) = Device::for_tests(kind) {
+                run_in_slices(&d, compact);
+            }
+        }
+    }
+
+    fn run_in_slices(d: &Device, compact: bool) {
         let scene = cornell();
-        let (whole, whole_stats) = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6)))
+        let opts = |budget| RenderOptions {
+            compact,
+            ..opts(budget)
+        };
+        let (whole, whole_stats) = Renderer::new(d, &scene, opts(Budget::PathsPerPixel(6)))
             .unwrap()
             .render(|_, _| {})
             .unwrap();
 
-        let mut r = Renderer::new(&d, &scene, opts(Budget::PathsPerPixel(6))).unwrap();
+        let mut r = Renderer::new(d, &scene, opts(Budget::PathsPerPixel(6))).unwrap();
         assert!(
             r.advance(Budget::PathsPerPixel(1)).is_err(),
             "advance before start"
@@ -753,6 +771,43 @@ mod tests {
                 .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)),
             "same image"
         );
+    }
+
+    /// After a render on the CPU backend, the group table holds the draws of the last
+    /// iteration recorded (read by its `extend`) and of the one after (written by it), in
+    /// their halves, as the host computes them.
+    #[test]
+    fn extend_leaves_the_next_iterations_group_draws_in_the_table() {
+        use cohort_kernels::group_draw::{draws_entry, light_entry, table_at};
+        use cohort_kernels::sampling::CoherentUniform;
+        let d = Device::for_tests(BackendKind::Cpu).unwrap();
+        // Without compaction, whose lists group slots by their place, not by slot.
+        let o = RenderOptions {
+            compact: false,
+            ..opts(Budget::PathsPerPixel(3))
+        };
+        let mut r = Renderer::new(&d, &cornell(), o).unwrap();
+        r.render(|_, _| {}).unwrap();
+        let f = r.frame;
+        assert!(
+            f.group_slots > 1,
+            "warp groups are tabled on the CPU backend"
+        );
+        let table = d.read(&r.paths.group_table).unwrap();
+        let last = f.iteration;
+        assert!(last > 2, "several iterations");
+        for it in [last, last + 1] {
+            for g in 0..f.slots.div_ceil(f.group_slots) {
+                let at = table_at(&f, g, it);
+                let what = format!("group {g}, iteration {it} of {last}");
+                assert_eq!(
+                    table[at],
+                    draws_entry::<CoherentUniform>(&f, g, it),
+                    "{what}"
+                );
+                assert_eq!(table[at + 1], light_entry(&f, g, it), "{what}");
+            }
+        }
     }
 
     #[test]
