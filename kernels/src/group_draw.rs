@@ -13,8 +13,10 @@
 //! configurations there can retire slots as `normal` does.
 //!
 //! Where a slot group holds more than one slot, its invocations need not each compute
-//! the same draws: [`draw_groups`] computes every group's once per iteration into a
-//! table, and `extend` (`SHADES_GROUP_TABLE`) reads its slot's group's entries.
+//! the same draws: each group's are computed once per iteration into a table, and
+//! `extend` (`SHADES_GROUP_TABLE`) reads its slot's group's entries. [`draw_groups`]
+//! fills it for a run's first iteration; from then on each `extend` fills it for the
+//! next.
 
 use crate::layout::*;
 use crate::light::shared_light_draw;
@@ -58,11 +60,17 @@ pub fn light_draw(f: &Frame, group: u32, iteration: u32) -> Vec2 {
 /// and y of the second ([`light_entry`]).
 pub const TABLE_STRIDE: u32 = 2;
 
-/// Entries of the group table of `slots` slots in groups of `group_slots`: two halves,
-/// one per iteration parity ([`table_at`]; at least one group, so that there is always a
-/// buffer to bind).
-pub fn table_len(slots: u32, group_slots: u32) -> usize {
-    (2 * TABLE_STRIDE * slots.div_ceil(group_slots.max(1)).max(1)) as usize
+/// Frame `f`'s slot groups, `ceil(slots / group_slots)` (`group_slots` > 1: with the
+/// group table).
+#[kernel_fn]
+pub fn groups(f: &Frame) -> u32 {
+    (f.slots + f.group_slots - 1) / f.group_slots
+}
+
+/// Entries of the group table of `groups` slot groups: two halves, one per iteration
+/// parity ([`table_at`]; at least one group, so that there is always a buffer to bind).
+pub fn table_len(groups: u32) -> usize {
+    (2 * TABLE_STRIDE * groups.max(1)) as usize
 }
 
 /// Whether `group` is one of frame `f`'s slot groups: `group < ceil(slots / group_slots)`,
@@ -77,8 +85,7 @@ pub fn is_group(f: &Frame, group: u32) -> bool {
 /// draws while it reads this one's.
 #[kernel_fn]
 pub fn table_at(f: &Frame, group: u32, iteration: u32) -> usize {
-    let groups = (f.slots + f.group_slots - 1) / f.group_slots;
-    (TABLE_STRIDE * ((iteration % 2) * groups + group)) as usize
+    (TABLE_STRIDE * ((iteration % 2) * groups(f) + group)) as usize
 }
 
 /// Group `group`'s first table entry at `iteration`: its patch (0 for a sampler without

@@ -42,8 +42,8 @@ pub const SHADES_GROUP_DRAWS: u32 = 1 << 23;
 /// `slot / Frame::group_slots`, not by the invocation's (`crate::group_draw`): the frame's
 /// `group_slots` is not 0 ([`group_draws`]).
 pub const SHADES_SLOT_GROUPS: u32 = 1 << 24;
-/// With [`SHADES_SLOT_GROUPS`], `extend` reads its group's draws from the table that
-/// `crate::group_draw::draw_groups` wrote for the iteration, rather than computing them:
+/// With [`SHADES_SLOT_GROUPS`], `extend` reads its group's draws from the group table
+/// (`crate::group_draw`), rather than computing them, and writes the next iteration's:
 /// where groups hold more than one slot (`Frame::group_slots` > 1), so that a group's
 /// draws are computed once, not in each of its invocations.
 pub const SHADES_GROUP_TABLE: u32 = 1 << 25;

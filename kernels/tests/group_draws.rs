@@ -11,7 +11,7 @@ use cohort::runtime::{BackendKind, Device};
 use cohort::{Group, Spec};
 use cohort_kernels::extend::extend;
 use cohort_kernels::group_draw::{
-    draw_groups, draws_entry, light_entry, patch_key, table_at, table_len, TABLE_STRIDE,
+    draw_groups, draws_entry, groups, light_entry, patch_key, table_at, table_len, TABLE_STRIDE,
 };
 use cohort_kernels::integrator::NextEvent;
 use cohort_kernels::layout::{Frame, DIFFUSE};
@@ -108,12 +108,11 @@ const SENTINEL: u32 = 0xDEAD_BEEF;
 /// The table that `draw_groups::<S>` writes for frame `f` on `d`, `slack` entries past
 /// its length left at [`SENTINEL`].
 fn table<S: DiffuseSampler>(d: &Device, f: &Frame, slack: usize) -> Vec<UVec4> {
-    let len = table_len(f.slots, f.group_slots);
+    let len = table_len(groups(f));
     let buf = d
         .upload(&vec![UVec4::splat(SENTINEL); len + slack])
         .unwrap();
-    let groups = f.slots.div_ceil(f.group_slots);
-    draw_groups::launch::<S>(d, groups, f, &buf).unwrap();
+    draw_groups::launch::<S>(d, groups(f), f, &buf).unwrap();
     d.read(&buf).unwrap()
 }
 
@@ -165,13 +164,15 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
                 ..Default::default()
             };
             let got = table::<S>(d, &f, 8);
-            let len = table_len(slots, group_slots);
-            let groups = slots.div_ceil(group_slots);
+            let len = table_len(groups(&f));
+            // Counted apart from `groups(&f)`, which the table's layout uses.
+            let n = slots.div_ceil(group_slots);
+            assert_eq!(groups(&f), n);
             let what =
                 format!("{name}: {slots} slots in groups of {group_slots}, iteration {iteration}");
-            for g in 0..groups {
+            for g in 0..n {
                 let at = table_at(&f, g, iteration);
-                assert_eq!(at, (TABLE_STRIDE * ((iteration % 2) * groups + g)) as usize);
+                assert_eq!(at, (TABLE_STRIDE * ((iteration % 2) * n + g)) as usize);
                 let mut want = host_entries::<S>(&f, g);
                 if exact_acos || want[0].x == got[at].x {
                     assert_eq!(got[at..at + 2], want, "{what}, group {g}");
@@ -191,7 +192,7 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
             }
             // The other iteration parity's half, and past the table, stay untouched.
             let other = table_at(&f, 0, iteration + 1);
-            let half = (TABLE_STRIDE * groups) as usize;
+            let half = (TABLE_STRIDE * n) as usize;
             assert!(
                 got[other..other + half]
                     .iter()

@@ -8,7 +8,7 @@
 use cohort::runtime::{Batch, GpuBuffer};
 use cohort::Grid;
 use cohort_kernels::extend::extend;
-use cohort_kernels::group_draw::draw_groups;
+use cohort_kernels::group_draw::{draw_groups, groups};
 use cohort_kernels::integrator::Integrator;
 use cohort_kernels::layout::Frame;
 use cohort_kernels::path_end::PathEnd;
@@ -238,7 +238,7 @@ impl<'a> Wavefront<'a> {
                     self.draw_groups::<S>(b)?;
                 }
                 // Every group's invocation writes its next draws, listed or not.
-                all = Grid::Threads(self.listed.max(self.groups()));
+                all = Grid::Threads(self.listed.max(groups(self.frame)));
             }
             return self.shade::<S, E, I>(b, all, set, count, live);
         };
@@ -266,24 +266,13 @@ impl<'a> Wavefront<'a> {
         Ok(())
     }
 
-    /// The slot groups of the frame's group table (`Frame::group_slots` > 1).
-    fn groups(&self) -> u32 {
-        self.frame.slots.div_ceil(self.frame.group_slots)
-    }
-
     /// Every slot group's draws of this iteration into the group table that `extend`
     /// reads with `SHADES_GROUP_TABLE` (`cohort_kernels::group_draw::draw_groups`): for
     /// a run's first iteration, after which each `extend` writes the next one's.
     fn draw_groups<S: DiffuseSampler>(&self, b: &mut LabelledBatch<'_>) -> Result<(), RenderError> {
         let f = self.frame;
         b.stage(Stage::Extend, |b| {
-            draw_groups::record::<S>(
-                b,
-                &self.specs.groups,
-                self.groups(),
-                f,
-                &self.paths.group_table,
-            )
+            draw_groups::record::<S>(b, &self.specs.groups, groups(f), f, &self.paths.group_table)
         })
     }
 

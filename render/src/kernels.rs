@@ -189,7 +189,7 @@ impl Renderer<'_> {
             self.paths.sort = Some(SortState::new(d, self.frame.slots, &self.scene)?);
         }
         if shading & SHADES_GROUP_TABLE != 0 {
-            let len = group_draw::table_len(self.frame.slots, self.frame.group_slots);
+            let len = group_draw::table_len(group_draw::groups(&self.frame));
             if self.paths.group_table.len() < len {
                 self.paths.group_table = d.alloc(len)?;
             }

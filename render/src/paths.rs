@@ -40,7 +40,7 @@ pub(crate) struct Paths {
     pub(crate) total: GpuBuffer<u32>,
     /// [completed paths, slots done]
     pub(crate) counters: GpuBuffer<u32>,
-    /// Each slot group's draws of the iteration (`cohort_kernels::group_draw::draw_groups`),
+    /// Each slot group's draws of the iteration and the next (`cohort_kernels::group_draw`),
     /// sized by the first run whose `extend` reads them (`SHADES_GROUP_TABLE`); one
     /// unread group before, which `extend` binds all the same.
     pub(crate) group_table: GpuBuffer<UVec4>,
@@ -80,7 +80,7 @@ impl Paths {
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
             counters: device.alloc(2)?,
-            group_table: device.alloc(group_draw::table_len(1, 1))?,
+            group_table: device.alloc(group_draw::table_len(1))?,
         })
     }
 }

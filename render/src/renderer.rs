@@ -778,7 +778,7 @@ mod tests {
     /// their halves, as the host computes them.
     #[test]
     fn extend_leaves_the_next_iterations_group_draws_in_the_table() {
-        use cohort_kernels::group_draw::{draws_entry, light_entry, table_at};
+        use cohort_kernels::group_draw::{draws_entry, groups, light_entry, table_at};
         use cohort_kernels::sampling::CoherentUniform;
         let d = Device::for_tests(BackendKind::Cpu).unwrap();
         // Without compaction, whose lists group slots by their place, not by slot.
@@ -797,7 +797,7 @@ mod tests {
         let last = f.iteration;
         assert!(last > 2, "several iterations");
         for it in [last, last + 1] {
-            for g in 0..f.slots.div_ceil(f.group_slots) {
+            for g in 0..groups(&f) {
                 let at = table_at(&f, g, it);
                 let what = format!("group {g}, iteration {it} of {last}");
                 assert_eq!(
