@@ -11,8 +11,8 @@ use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::group_draw::{
-    draws_entry, glossy_cell_draw, is_group, light_draw, light_entry, patch_key, roulette_draw,
-    table_at,
+    draws_entry, glossy_cell_draw, is_group, light_draw, light_entry, params_entry, patch_key,
+    roulette_draw, table_at,
 };
 use crate::integrator::Integrator;
 use crate::layout::*;
@@ -331,15 +331,30 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     if tabled {
         if is_group(f, gi) {
             let next = table_at(f, gi, f.iteration + 1);
-            group_table[next] = draws_entry::<S>(f, gi, f.iteration + 1);
+            let draws = draws_entry::<S>(f, gi, f.iteration + 1);
+            group_table[next] = draws;
             group_table[next + 1] = light_entry(f, gi, f.iteration + 1);
+            group_table[next + 2] = params_entry::<S>(f, draws);
         }
     }
     // The patch is drawn only for a sampler that reads it (`DiffuseSampler::GROUP_VALUE`).
     let mut shared_patch = 0u32;
+    // With the table, the sampler's parameters of the group's patch too
+    // (`DiffuseSampler::group_params`), which each ray would otherwise compute.
+    let mut group_params = Vec4::ZERO;
     if S::GROUP_VALUE {
         if tabled {
-            shared_patch = group_table[table_at(f, slot_group, f.iteration)].x;
+            let at = table_at(f, slot_group, f.iteration);
+            shared_patch = group_table[at].x;
+            if S::GROUP_PARAMS {
+                let p = group_table[at + 2];
+                group_params = Vec4::new(
+                    f32::from_bits(p.x),
+                    f32::from_bits(p.y),
+                    f32::from_bits(p.z),
+                    f32::from_bits(p.w),
+                );
+            }
         } else if slot_groups {
             shared_patch = S::group_value(patch_key(f, slot_group, f.iteration), f.patches_n);
         } else {
@@ -666,7 +681,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     choice: uniform(key, 4),
                     group_value: shared_patch,
                     patches_n: f.patches_n,
-                    pad: 0,
+                    grouped: if tabled && S::GROUP_PARAMS { 1 } else { 0 },
+                    group_params,
                 };
                 let shaded = bsdf_shade::<S>(
                     shading,

@@ -57,8 +57,9 @@ pub fn light_draw(f: &Frame, group: u32, iteration: u32) -> Vec2 {
 
 /// Entries of the group table per group and iteration: the patch, the glossy cell and
 /// the roulette numbers' bits in the first ([`draws_entry`]), the light draw's bits in x
-/// and y of the second ([`light_entry`]).
-pub const TABLE_STRIDE: u32 = 2;
+/// and y of the second ([`light_entry`]), the sampler's parameters of the patch in the
+/// third ([`params_entry`]).
+pub const TABLE_STRIDE: u32 = 3;
 
 /// Frame `f`'s slot groups, `ceil(slots / group_slots)` (`group_slots` > 1: with the
 /// group table).
@@ -105,6 +106,19 @@ pub fn draws_entry<S: DiffuseSampler>(f: &Frame, group: u32, iteration: u32) -> 
     )
 }
 
+/// Group `group`'s third table entry, from its first (`draws`): the bits of the diffuse
+/// sampler's parameters of its patch (`DiffuseSampler::group_params`; zero for a sampler
+/// without them), which every ray of the group would otherwise compute.
+#[kernel_fn]
+pub fn params_entry<S: DiffuseSampler>(f: &Frame, draws: UVec4) -> UVec4 {
+    let mut p = UVec4::ZERO;
+    if S::GROUP_PARAMS {
+        let v = S::group_params(draws.x, f.patches_n);
+        p = UVec4::new(v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), v.w.to_bits());
+    }
+    p
+}
+
 /// Group `group`'s second table entry at `iteration`: its light draw's bits.
 #[kernel_fn]
 pub fn light_entry(f: &Frame, group: u32, iteration: u32) -> UVec4 {
@@ -130,7 +144,9 @@ pub fn draw_groups<S: DiffuseSampler>(
 ) {
     if is_group(f, gi) {
         let at = table_at(f, gi, f.iteration);
-        table[at] = draws_entry::<S>(f, gi, f.iteration);
+        let draws = draws_entry::<S>(f, gi, f.iteration);
+        table[at] = draws;
         table[at + 1] = light_entry(f, gi, f.iteration);
+        table[at + 2] = params_entry::<S>(f, draws);
     }
 }

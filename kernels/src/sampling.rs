@@ -39,6 +39,24 @@ pub trait DiffuseSampler {
     /// `xyz`; in `w` the factor by which the path throughput is multiplied on top of the
     /// albedo (f·cos/pdf divided by the albedo: 1 for exact cosine sampling).
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4;
+    /// Whether the sampler derives values from the group's draw alone ([`group_params`]):
+    /// where it does, a backend that keeps each group's draws in a table (the CPU
+    /// backend's warp and block levels) computes them once per group and calls
+    /// [`sample_grouped`] instead of `sample`.
+    ///
+    /// [`group_params`]: DiffuseSampler::group_params
+    /// [`sample_grouped`]: DiffuseSampler::sample_grouped
+    const GROUP_PARAMS: bool = false;
+    /// What `sample` computes from `group_value` and `patches_n` alone, e.g. the bounds of
+    /// the group's patch: the same in every ray of the group.
+    fn group_params(_group_value: u32, _patches_n: u32) -> Vec4 {
+        Vec4::ZERO
+    }
+    /// `sample` given `params = group_params(group_value, patches_n)`: the same direction
+    /// and weight, bit for bit (`cohort check` tests it), without recomputing `params`.
+    fn sample_grouped(n: Vec3, u: Vec2, group_value: u32, _params: Vec4, patches_n: u32) -> Vec4 {
+        Self::sample(n, u, group_value, patches_n)
+    }
 }
 
 /// The paper's `normal` algorithm: independent cosine sampling per path.
@@ -73,20 +91,28 @@ pub fn cosine_patch(key: u32, patches_n: u32) -> u32 {
 }
 
 /// Bounds of patch `patch` of the N x 4N split: cos of its lower and upper polar angle
-/// (x = cos(i dT), y = cos((i+1) dT)) and, in z, the azimuth at fraction `v` of its
-/// azimuth band.
+/// (x = cos(i dT), y = cos((i+1) dT)), in z its azimuth band's index j and in w the band's
+/// width dP: the patch's azimuths run from j dP to (j + 1) dP ([`patch_azimuth`]).
 #[kernel_fn]
-pub fn patch_bounds(patch: u32, patches_n: u32, v: f32) -> Vec3 {
+pub fn patch_bounds(patch: u32, patches_n: u32) -> Vec4 {
     let m = 4 * patches_n;
     let i = patch / m;
     let j = patch % m;
     let dt = core::f32::consts::FRAC_PI_2 / patches_n as f32;
     let dp = 2.0 * core::f32::consts::PI / m as f32;
-    Vec3::new(
+    Vec4::new(
         (i as f32 * dt).cos(),
         ((i + 1) as f32 * dt).cos(),
-        (j as f32 + v) * dp,
+        j as f32,
+        dp,
     )
+}
+
+/// The azimuth at fraction `v` of the azimuth band of a patch with bounds `b`
+/// ([`patch_bounds`]).
+#[kernel_fn]
+pub fn patch_azimuth(b: Vec4, v: f32) -> f32 {
+    (b.z + v) * b.w
 }
 
 /// Local direction (z up) with polar cosine `cos_t` and azimuth `phi`.
@@ -103,15 +129,22 @@ pub struct CoherentUniform;
 
 #[kernel_impl]
 impl DiffuseSampler for CoherentUniform {
+    const GROUP_PARAMS: bool = true;
     fn group_value(key: u32, patches_n: u32) -> u32 {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let b = patch_bounds(group_value, patches_n, u.y);
+        let b = patch_bounds(group_value, patches_n);
+        Self::sample_grouped(n, u, group_value, b, patches_n)
+    }
+    fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
+        patch_bounds(group_value, patches_n)
+    }
+    fn sample_grouped(n: Vec3, u: Vec2, _group_value: u32, b: Vec4, _patches_n: u32) -> Vec4 {
         let c0 = b.x;
         let c1 = b.y;
         let cos_t = c0 - u.x * (c0 - c1);
-        let d = frame(n) * polar_dir(cos_t, b.z);
+        let d = frame(n) * polar_dir(cos_t, patch_azimuth(b, u.y));
         // f cos / pdf over the albedo: (cos / pi) / (P / A), P = dp/2pi (c0^2 - c1^2),
         // A = dp (c0 - c1), so P / A = (c0 + c1) / 2pi and the factor is 2 cos / (c0 + c1).
         let w = 2.0 * cos_t / (c0 + c1);
@@ -125,16 +158,23 @@ pub struct CoherentCosine;
 
 #[kernel_impl]
 impl DiffuseSampler for CoherentCosine {
+    const GROUP_PARAMS: bool = true;
     fn group_value(key: u32, patches_n: u32) -> u32 {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let b = patch_bounds(group_value, patches_n, u.y);
+        let b = patch_bounds(group_value, patches_n);
+        Self::sample_grouped(n, u, group_value, b, patches_n)
+    }
+    fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
+        patch_bounds(group_value, patches_n)
+    }
+    fn sample_grouped(n: Vec3, u: Vec2, _group_value: u32, b: Vec4, _patches_n: u32) -> Vec4 {
         let c0 = b.x;
         let c1 = b.y;
         // cos^2 uniform in [c1^2, c0^2] gives density proportional to cos inside the band.
         let cos2 = c0 * c0 - u.x * (c0 * c0 - c1 * c1);
-        let d = frame(n) * polar_dir(cos2.max(0.0).sqrt(), b.z);
+        let d = frame(n) * polar_dir(cos2.max(0.0).sqrt(), patch_azimuth(b, u.y));
         Vec4::new(d.x, d.y, d.z, 1.0)
     }
 }
@@ -157,12 +197,23 @@ pub fn concentric_disk(p: Vec2) -> Vec2 {
     Vec2::new(r * phi.cos(), r * phi.sin())
 }
 
+/// Cell `cell` of a `k` x `k` grid over the unit square: its column and row in x and y,
+/// `k` in z ([`grid_point`]).
+#[kernel_fn]
+pub fn grid_cell(cell: u32, k: u32) -> Vec4 {
+    Vec4::new((cell % k) as f32, (cell / k) as f32, k as f32, 0.0)
+}
+
+/// Point of the grid cell `c` ([`grid_cell`]) at offset `u` in it.
+#[kernel_fn]
+pub fn grid_point(c: Vec4, u: Vec2) -> Vec2 {
+    Vec2::new((c.x + u.x) / c.z, (c.y + u.y) / c.z)
+}
+
 /// Point of cell `cell` of a `k` x `k` grid over the unit square, at offset `u` in it.
 #[kernel_fn]
 pub fn cell_point(cell: u32, k: u32, u: Vec2) -> Vec2 {
-    let cx = (cell % k) as f32;
-    let cy = (cell / k) as f32;
-    Vec2::new((cx + u.x) / k as f32, (cy + u.y) / k as f32)
+    grid_point(grid_cell(cell, k), u)
 }
 
 /// Beyond the paper: equal-area patches. The unit square is cut into 2N x 2N cells
@@ -178,8 +229,16 @@ impl DiffuseSampler for CoherentEqualArea {
         let k = 2 * patches_n;
         crate::rng::hash(key) % (k * k)
     }
+    const GROUP_PARAMS: bool = true;
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let d2 = concentric_disk(cell_point(group_value, 2 * patches_n, u));
+        let c = grid_cell(group_value, 2 * patches_n);
+        Self::sample_grouped(n, u, group_value, c, patches_n)
+    }
+    fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
+        grid_cell(group_value, 2 * patches_n)
+    }
+    fn sample_grouped(n: Vec3, u: Vec2, _group_value: u32, c: Vec4, _patches_n: u32) -> Vec4 {
+        let d2 = concentric_disk(grid_point(c, u));
         let z = (1.0 - d2.x * d2.x - d2.y * d2.y).max(0.0).sqrt();
         let d = frame(n) * Vec3::new(d2.x, d2.y, z);
         Vec4::new(d.x, d.y, d.z, 1.0)

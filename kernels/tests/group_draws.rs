@@ -11,7 +11,8 @@ use cohort::runtime::{BackendKind, Device};
 use cohort::{Group, Spec};
 use cohort_kernels::extend::extend;
 use cohort_kernels::group_draw::{
-    draw_groups, draws_entry, groups, light_entry, patch_key, table_at, table_len, TABLE_STRIDE,
+    draw_groups, draws_entry, groups, light_entry, params_entry, patch_key, table_at, table_len,
+    TABLE_STRIDE,
 };
 use cohort_kernels::integrator::NextEvent;
 use cohort_kernels::layout::{Frame, DIFFUSE};
@@ -99,11 +100,17 @@ fn a_tabled_extend_reads_and_writes_the_table() {
         .lines()
         .filter(|l| l.trim_start().starts_with("group_table["))
         .count();
-    assert!(reads >= 3 && writes == 2, "{reads} reads, {writes} writes");
+    assert!(reads >= 4 && writes == 3, "{reads} reads, {writes} writes");
     assert!(tabled.contains("var<storage, read_write> group_table"));
 }
 
 const SENTINEL: u32 = 0xDEAD_BEEF;
+
+/// How far a GPU's sampler parameters (cosines of band edges, the band's width) may be
+/// from the host's, relative to their size (at least 1): lavapipe's and NVIDIA's `cos`
+/// are within it, and the cosine of a neighbouring band's edge is at least
+/// 1 - cos(pi / 32) = 4.8e-3 away for the N of these tests (at most 8).
+const PARAMS_TOLERANCE: f32 = 1e-4;
 
 /// The table that `draw_groups::<S>` writes for frame `f` on `d`, `slack` entries past
 /// its length left at [`SENTINEL`].
@@ -118,11 +125,23 @@ fn table<S: DiffuseSampler>(d: &Device, f: &Frame, slack: usize) -> Vec<UVec4> {
 
 /// What `extend` computes for group `g` itself at the frame's iteration, as the table
 /// holds it: the kernel functions, run on the host.
-fn host_entries<S: DiffuseSampler>(f: &Frame, g: u32) -> [UVec4; 2] {
+fn host_entries<S: DiffuseSampler>(f: &Frame, g: u32) -> [UVec4; 3] {
+    let draws = draws_entry::<S>(f, g, f.iteration);
     [
-        draws_entry::<S>(f, g, f.iteration),
+        draws,
         light_entry(f, g, f.iteration),
+        params_entry::<S>(f, draws),
     ]
+}
+
+/// Whether the sampler's parameters `got` from a device are the host's `want` as floats
+/// within `tolerance` of their size (at least 1): a GPU's `cos` and division are not the
+/// host's to the bit.
+fn params_near(got: UVec4, want: UVec4, tolerance: f32) -> bool {
+    (0..4).all(|i| {
+        let (g, w) = (f32::from_bits(got[i]), f32::from_bits(want[i]));
+        (g - w).abs() <= tolerance * w.abs().max(1.0)
+    })
 }
 
 /// The polar band of `cosine_patch`'s draw for group `g` on the host, and how far (in
@@ -175,7 +194,14 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
                 assert_eq!(at, (TABLE_STRIDE * ((iteration % 2) * n + g)) as usize);
                 let mut want = host_entries::<S>(&f, g);
                 if exact_acos || want[0].x == got[at].x {
-                    assert_eq!(got[at..at + 2], want, "{what}, group {g}");
+                    assert_eq!(got[at..at + 2], want[..2], "{what}, group {g}");
+                    let tolerance = if exact_acos { 0.0 } else { PARAMS_TOLERANCE };
+                    assert!(
+                        params_near(got[at + 2], want[2], tolerance),
+                        "{what}, group {g}: parameters {:?}, the host's {:?}",
+                        got[at + 2],
+                        want[2]
+                    );
                     continue;
                 }
                 // A GPU's acos is not the host's: `cosine_patch` may pick the
@@ -188,7 +214,12 @@ fn check_table<S: DiffuseSampler>(d: &Device, name: &str, exact_acos: bool) {
                     want[0].x
                 );
                 want[0].x = p;
-                assert_eq!(got[at..at + 2], want, "{what}, group {g}");
+                want[2] = params_entry::<S>(&f, want[0]);
+                assert_eq!(got[at..at + 2], want[..2], "{what}, group {g}");
+                assert!(
+                    params_near(got[at + 2], want[2], PARAMS_TOLERANCE),
+                    "{what}, group {g}: parameters of the neighbouring band"
+                );
             }
             // The other iteration parity's half, and past the table, stay untouched.
             let other = table_at(&f, 0, iteration + 1);

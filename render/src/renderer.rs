@@ -775,10 +775,13 @@ mod tests {
 
     /// After a render on the CPU backend, the group table holds the draws of the last
     /// iteration recorded (read by its `extend`) and of the one after (written by it), in
-    /// their halves, as the host computes them.
+    /// their halves, and the sampler's parameters of their patches, as the host computes
+    /// them.
     #[test]
     fn extend_leaves_the_next_iterations_group_draws_in_the_table() {
-        use cohort_kernels::group_draw::{draws_entry, groups, light_entry, table_at};
+        use cohort_kernels::group_draw::{
+            draws_entry, groups, light_entry, params_entry, table_at,
+        };
         use cohort_kernels::sampling::CoherentUniform;
         let d = Device::for_tests(BackendKind::Cpu).unwrap();
         // Without compaction, whose lists group slots by their place, not by slot.
@@ -806,6 +809,11 @@ mod tests {
                     "{what}"
                 );
                 assert_eq!(table[at + 1], light_entry(&f, g, it), "{what}");
+                assert_eq!(
+                    table[at + 2],
+                    params_entry::<CoherentUniform>(&f, table[at]),
+                    "{what}"
+                );
             }
         }
     }

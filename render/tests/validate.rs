@@ -1,11 +1,13 @@
 //! `cohort_render::validate` on the CPU backend: the example's strategy and a correct one
 //! pass, a deliberately wrong one (a density off by 10 % in two quarters of the azimuth,
-//! with the right mean of cos theta) fails, BSDFs pass, and the example runs end to end.
+//! with the right mean of cos theta) fails, as does one whose grouped form disagrees with
+//! its `sample`, BSDFs pass, and the example runs end to end.
 //! Fixed seeds: every run draws the same numbers.
 
 use cohort::prelude::*;
 use cohort::runtime::{BackendKind, Device};
-use cohort_kernels::sampling::{cosine_hemisphere, frame, DiffuseSampler};
+use cohort_kernels::rng::hash;
+use cohort_kernels::sampling::{cosine_hemisphere, frame, CoherentUniform, DiffuseSampler};
 use cohort_render::validate::{self, builtin_bsdfs, BsdfOptions, SamplerOptions};
 
 #[allow(dead_code, unused_imports)]
@@ -37,6 +39,36 @@ impl DiffuseSampler for SkewedAzimuth {
     }
 }
 
+/// Cosine sampling in the group's sector of azimuth, with a `group_params` one sector off
+/// the one its `sample` uses: its directions are right, the renderer's grouped form of it is
+/// not.
+pub struct StaleParams;
+
+/// The group's sector of azimuth: its index in x, the number of sectors in y.
+#[kernel_fn]
+pub fn sector(group_value: u32, patches_n: u32) -> Vec4 {
+    let sectors = 4 * patches_n;
+    Vec4::new((group_value % sectors) as f32, sectors as f32, 0.0, 0.0)
+}
+
+#[kernel_impl]
+impl DiffuseSampler for StaleParams {
+    const GROUP_PARAMS: bool = true;
+    fn group_value(key: u32, _patches_n: u32) -> u32 {
+        hash(key)
+    }
+    fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
+        Self::sample_grouped(n, u, group_value, sector(group_value, patches_n), patches_n)
+    }
+    fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
+        sector(group_value, patches_n) + Vec4::X
+    }
+    fn sample_grouped(n: Vec3, u: Vec2, _group_value: u32, s: Vec4, _patches_n: u32) -> Vec4 {
+        let d = frame(n) * cosine_hemisphere(Vec2::new(u.x, (s.x + u.y) / s.y));
+        Vec4::new(d.x, d.y, d.z, 1.0)
+    }
+}
+
 fn small() -> SamplerOptions {
     SamplerOptions {
         levels: vec![Group::Thread, Group::Warp],
@@ -50,6 +82,24 @@ fn the_correct_sampler_passes() {
     let r = validate::sampler::<cohort_kernels::sampling::Cosine>(&cpu(), &small()).unwrap();
     println!("{r}");
     assert!(r.passed(), "{r}");
+}
+
+/// A strategy with group parameters is tested for its grouped form too: the paper's passes,
+/// one whose parameters disagree with its `sample` fails that test alone.
+#[test]
+fn a_grouped_form_that_disagrees_fails() {
+    // One level: the grouped test does not depend on it.
+    let opts = SamplerOptions {
+        levels: vec![Group::Thread],
+        samples: 1 << 14,
+        ..small()
+    };
+    let r = validate::sampler::<CoherentUniform>(&cpu(), &opts).unwrap();
+    assert!(r.passed(), "{r}");
+    assert!(r.tests.iter().any(|t| t.test == "grouped"), "{r}");
+    let r = validate::sampler::<StaleParams>(&cpu(), &opts).unwrap();
+    let failed: Vec<_> = r.failures().iter().map(|t| t.test.clone()).collect();
+    assert_eq!(failed, ["grouped"], "{r}");
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Mitsuba `diffuse`: Lambertian reflection, its directions drawn by the diffuse strategy
 //! `S` (the paper's coherent samplers, or independent cosine sampling).
 
-use super::{scattered, Bsdf, Draws, Hit, Scattered};
+use super::{diffuse_direction, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
 use crate::sampling::DiffuseSampler;
 use cohort::prelude::*;
@@ -25,7 +25,7 @@ impl Bsdf for Diffuse {
         beta: Vec3,
         r: Draws,
     ) -> Scattered {
-        let s = S::sample(at.n, r.u, r.group_value, r.patches_n);
+        let s = diffuse_direction::<S>(at.n, r);
         let dir = s.truncate();
         // MIS weights use the cosine density whatever strategy S drew the direction: every
         // strategy covers the whole hemisphere (over the group's random patch), so any

@@ -44,7 +44,24 @@ pub struct Draws {
     pub group_value: u32,
     /// N of the strategy's N x 4N patches.
     pub patches_n: u32,
-    pub pad: u32,
+    /// 1: `group_params` holds `S::group_params(group_value, patches_n)`, read from the
+    /// group table, and the strategy samples with it ([`diffuse_direction`]); 0: it is
+    /// unset.
+    pub grouped: u32,
+    /// The strategy's values of the group (`DiffuseSampler::group_params`) where `grouped`.
+    pub group_params: Vec4,
+}
+
+/// The diffuse strategy `S`'s direction and weight for a bounce at normal `n`
+/// (`DiffuseSampler::sample`), from the group's parameters where the group table holds
+/// them.
+#[kernel_fn]
+pub fn diffuse_direction<S: DiffuseSampler>(n: Vec3, r: Draws) -> Vec4 {
+    if S::GROUP_PARAMS && r.grouped != 0 {
+        S::sample_grouped(n, r.u, r.group_value, r.group_params, r.patches_n)
+    } else {
+        S::sample(n, r.u, r.group_value, r.patches_n)
+    }
 }
 
 /// A direction a BSDF drew ([`Bsdf::sample`]) and how the path carries on.

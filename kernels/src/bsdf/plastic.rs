@@ -3,7 +3,7 @@
 //! Fresnel-weighted mean albedos (`sampling::plastic_specular_probability`); the base's
 //! directions are drawn by the diffuse strategy `S`. One-sided.
 
-use super::{scattered, Bsdf, Draws, Hit, Scattered};
+use super::{diffuse_direction, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
 use crate::sampling::{
     fresnel_dielectric, plastic_base, plastic_specular_probability, DiffuseSampler,
@@ -36,7 +36,7 @@ impl Bsdf for Plastic {
             out = beta * at.m.transmittance * (f_i / p_spec);
             delta_p = p_spec;
         } else {
-            let s = S::sample(at.n, r.u, r.group_value, r.patches_n);
+            let s = diffuse_direction::<S>(at.n, r);
             dir = s.truncate();
             let c = dir.dot(at.n).max(0.0);
             let f_o = fresnel_dielectric(c, at.m.param);

@@ -5,7 +5,7 @@
 //! `lerp_gather` interpolates it) and by the internal reflections the coating sends back.
 //! The table and the internal reflectance come from `cohort_scenes::rough_plastic`.
 
-use super::{absorbed, scattered, Bsdf, Draws, Hit, Scattered};
+use super::{absorbed, diffuse_direction, scattered, Bsdf, Draws, Hit, Scattered};
 use crate::layout::*;
 use crate::sampling::{
     fresnel_dielectric, microfacet_eval, microfacet_sample, plastic_specular_probability,
@@ -111,7 +111,7 @@ impl Bsdf for RoughPlastic {
                 weight = at.m.transmittance * (fresnel * e.x / (e.y * ps));
             }
         } else {
-            let s = S::sample(at.n, r.u, r.group_value, r.patches_n);
+            let s = diffuse_direction::<S>(at.n, r);
             wi = fr.transpose() * s.truncate();
             if wi.z > 0.0 {
                 let t_o = transmittance(textures, at.m, wi.z);

@@ -10,11 +10,16 @@
 //! - **within draw** (for information): each of a few draws' rays, unweighted, against the
 //!   cosine density by Pearson's test, and how much of the cosine mass the cells they reach
 //!   hold. A coherent strategy is expected to fail it (its draw's rays share a patch).
+//! - **grouped** (counted; a strategy with `GROUP_PARAMS`): on the host, `sample_grouped`
+//!   given `group_params` returns `sample`'s bits for every group draw, normal and random
+//!   pair tried. The renderer calls either, so a strategy whose two forms disagree would
+//!   render differently by backend and group level.
 
 use std::path::PathBuf;
 
 use cohort::runtime::Device;
 use cohort::Group;
+use cohort_kernels::rng::hash;
 use cohort_kernels::sampling::{frame, DiffuseSampler};
 use cohort_kernels::validate::{sample_sampler, SamplerParams};
 use glam::{Vec3, Vec4};
@@ -129,6 +134,9 @@ pub fn sampler<S: DiffuseSampler + 'static>(
     let mut report = Report::new(device_name(device), opts.alpha);
     for &level in &opts.levels {
         level_tests::<S>(device, opts, &name, level, &mut report)?;
+    }
+    if S::GROUP_PARAMS {
+        report.tests.push(grouped_test::<S>(opts, &name));
     }
     if let Some(dir) = &opts.out {
         report.write_failure_images(dir)?;
@@ -303,4 +311,49 @@ fn level_tests<S: DiffuseSampler + 'static>(
         });
     }
     Ok(())
+}
+
+/// Group draws, and random pairs per side of a grid, that the grouped test tries.
+const GROUPED_DRAWS: u32 = 256;
+const GROUPED_GRID: u32 = 16;
+
+/// The grouped test (module documentation), on the host: the first disagreement fails it.
+fn grouped_test<S: DiffuseSampler>(opts: &SamplerOptions, name: &str) -> TestResult {
+    let pn = opts.patches_n;
+    let mut tried = 0u64;
+    let mut failure = None;
+    'draws: for draw in 0..GROUPED_DRAWS {
+        let value = S::group_value(hash(opts.seed ^ hash(draw)), pn);
+        let params = S::group_params(value, pn);
+        for &n in &opts.normals {
+            for k in 0..GROUPED_GRID * GROUPED_GRID {
+                let cell = |c: u32| (c as f32 + 0.5) / GROUPED_GRID as f32;
+                let u = glam::Vec2::new(cell(k % GROUPED_GRID), cell(k / GROUPED_GRID));
+                let plain = S::sample(n, u, value, pn);
+                let grouped = S::sample_grouped(n, u, value, params, pn);
+                tried += 1;
+                if plain.to_array().map(f32::to_bits) != grouped.to_array().map(f32::to_bits) {
+                    failure = Some(format!(
+                        "group value {value}, normal {n}, u {u}: sample gives {plain}, \
+                         sample_grouped {grouped}"
+                    ));
+                    break 'draws;
+                }
+            }
+        }
+    }
+    TestResult {
+        subject: name.to_string(),
+        config: "host".into(),
+        test: "grouped".into(),
+        outcome: Outcome {
+            statistic: 0.0,
+            dof: 0,
+            p_value: if failure.is_some() { 0.0 } else { 1.0 },
+            failure,
+        },
+        informational: false,
+        note: format!("{tried} samples compared bit for bit"),
+        table: None,
+    }
 }
