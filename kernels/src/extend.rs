@@ -681,7 +681,13 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
                     choice: uniform(key, 4),
                     group_value: shared_patch,
                     patches_n: f.patches_n,
-                    grouped: if tabled && S::GROUP_PARAMS { 1 } else { 0 },
+                    // The parameters were read with the group's draw: only for a sampler
+                    // that has both.
+                    grouped: if tabled && S::GROUP_VALUE && S::GROUP_PARAMS {
+                        1
+                    } else {
+                        0
+                    },
                     group_params,
                 };
                 let shaded = bsdf_shade::<S>(

@@ -39,7 +39,8 @@ pub trait DiffuseSampler {
     /// `xyz`; in `w` the factor by which the path throughput is multiplied on top of the
     /// albedo (f·cos/pdf divided by the albedo: 1 for exact cosine sampling).
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4;
-    /// Whether the sampler derives values from the group's draw alone ([`group_params`]):
+    /// Whether the sampler derives values from the group's draw alone ([`group_params`];
+    /// read only with `GROUP_VALUE`):
     /// where it does, a backend that keeps each group's draws in a table (the CPU
     /// backend's warp and block levels) computes them once per group and calls
     /// [`sample_grouped`] instead of `sample`.
