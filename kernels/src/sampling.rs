@@ -135,8 +135,8 @@ impl DiffuseSampler for CoherentUniform {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let b = patch_bounds(group_value, patches_n);
-        Self::sample_grouped(n, u, group_value, b, patches_n)
+        let params = Self::group_params(group_value, patches_n);
+        Self::sample_grouped(n, u, group_value, params, patches_n)
     }
     fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
         patch_bounds(group_value, patches_n)
@@ -164,8 +164,8 @@ impl DiffuseSampler for CoherentCosine {
         cosine_patch(key, patches_n)
     }
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let b = patch_bounds(group_value, patches_n);
-        Self::sample_grouped(n, u, group_value, b, patches_n)
+        let params = Self::group_params(group_value, patches_n);
+        Self::sample_grouped(n, u, group_value, params, patches_n)
     }
     fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
         patch_bounds(group_value, patches_n)
@@ -232,8 +232,8 @@ impl DiffuseSampler for CoherentEqualArea {
     }
     const GROUP_PARAMS: bool = true;
     fn sample(n: Vec3, u: Vec2, group_value: u32, patches_n: u32) -> Vec4 {
-        let c = grid_cell(group_value, 2 * patches_n);
-        Self::sample_grouped(n, u, group_value, c, patches_n)
+        let params = Self::group_params(group_value, patches_n);
+        Self::sample_grouped(n, u, group_value, params, patches_n)
     }
     fn group_params(group_value: u32, patches_n: u32) -> Vec4 {
         grid_cell(group_value, 2 * patches_n)

@@ -322,12 +322,12 @@ fn grouped_test<S: DiffuseSampler>(opts: &SamplerOptions, name: &str) -> TestRes
     let pn = opts.patches_n;
     let mut tried = 0u64;
     let mut failure = None;
+    let cell = |c: u32| (c as f32 + 0.5) / GROUPED_GRID as f32;
     'draws: for draw in 0..GROUPED_DRAWS {
         let value = S::group_value(hash(opts.seed ^ hash(draw)), pn);
         let params = S::group_params(value, pn);
         for &n in &opts.normals {
             for k in 0..GROUPED_GRID * GROUPED_GRID {
-                let cell = |c: u32| (c as f32 + 0.5) / GROUPED_GRID as f32;
                 let u = glam::Vec2::new(cell(k % GROUPED_GRID), cell(k / GROUPED_GRID));
                 let plain = S::sample(n, u, value, pn);
                 let grouped = S::sample_grouped(n, u, value, params, pn);
