@@ -19,6 +19,9 @@
 //!    `offset + ones before it` (flag 1) or `total + zeros before it` (flag 0), where
 //!    the ones before a ray inside its row word are a popcount of the bits below it.
 //!
+//! On the CPU backend each of the three runs as one loop per dispatch that writes the
+//! same words (`whole`), instead of as coroutines switching at every barrier.
+//!
 //! Traffic per ray: 4 B of flags and 4 B of ids read, 4 B written (the minimum, 12 B),
 //! plus 1 bit written and read back. The kernels have 1, 2 and 3 workgroup barriers.
 //!
@@ -34,6 +37,8 @@
 //! is used directly.
 
 use cohort::prelude::*;
+
+mod whole;
 
 /// Invocations per workgroup of every compaction kernel.
 pub const WG: u32 = 256;
@@ -76,7 +81,7 @@ pub fn sum_all(nsg: u32, part: &mut [u32; 256]) -> u32 {
 }
 
 /// Per block: pack each column's 32 flags into a word and count the block's flags.
-#[kernel(workgroup = 256)]
+#[kernel(workgroup = 256, cpu_dispatch = crate::compact::whole::compact_count_whole)]
 pub fn compact_count(
     #[builtin(local_index)] li: u32,
     #[builtin(workgroup_index)] wg: u32,
@@ -123,7 +128,7 @@ pub fn compact_count(
 
 /// One workgroup turns the block counts into exclusive block offsets (in place) and
 /// writes the total. The invocation in slot `p` handles a contiguous run of blocks.
-#[kernel(workgroup = 256)]
+#[kernel(workgroup = 256, cpu_dispatch = crate::compact::whole::compact_offsets_whole)]
 pub fn compact_offsets(
     #[builtin(local_index)] li: u32,
     #[builtin(subgroup_id)] sg: u32,
@@ -176,7 +181,7 @@ pub fn compact_offsets(
 }
 
 /// Per block: rank every ray from the packed bits and move its id to its place.
-#[kernel(workgroup = 256)]
+#[kernel(workgroup = 256, cpu_dispatch = crate::compact::whole::compact_scatter_whole)]
 pub fn compact_scatter(
     #[builtin(local_index)] li: u32,
     #[builtin(workgroup_index)] wg: u32,

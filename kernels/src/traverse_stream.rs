@@ -264,7 +264,37 @@ fn trace_slots(
 #[derive(Default)]
 struct Stream {
     rays: Rays,
-    arena: Vec<u32>,
+    arena: Arena,
+}
+
+/// The index lists of a stream's nodes: regions that compress stores fill from their
+/// start. Grown without a zero fill, so that the pages of a region no list reaches are
+/// never touched (a fill wrote each level's eight regions of the parent's length whole:
+/// a fifth of a render's page faults, in its first dispatches).
+#[derive(Default)]
+struct Arena(Vec<std::mem::MaybeUninit<u32>>);
+
+impl Arena {
+    /// Room for at least `len` entries.
+    fn reserve(&mut self, len: usize) {
+        if self.0.len() < len {
+            self.0.reserve(len - self.0.len());
+            // SAFETY: within the capacity just reserved; the elements are `MaybeUninit`.
+            unsafe { self.0.set_len(len) };
+        }
+    }
+
+    fn as_mut_ptr(&mut self) -> *mut u32 {
+        self.0.as_mut_ptr() as *mut u32
+    }
+
+    /// Entries `from..to`.
+    ///
+    /// # Safety
+    /// Each entry of the range was written.
+    unsafe fn list(&self, from: usize, to: usize) -> &[u32] {
+        &*(&self.0[from..to] as *const [std::mem::MaybeUninit<u32>] as *const [u32])
+    }
 }
 
 thread_local! {
@@ -360,7 +390,8 @@ impl Rays {
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::{
-        field, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, RECORD_STRIDE, SLOT_IDLE,
+        field, Arena, RaySource, Rays, Skip, Triangle, WideNode, DONE, MISS, RECORD_STRIDE,
+        SLOT_IDLE,
     };
     use crate::layout::SLOT_ENDED;
 
@@ -872,7 +903,7 @@ mod avx512 {
         nodes: &[WideNode],
         tris: &[Triangle],
         any: bool,
-        arena: &mut Vec<u32>,
+        arena: &mut Arena,
         n: usize,
     ) {
         if n == 0 || nodes.is_empty() {
@@ -880,9 +911,7 @@ mod avx512 {
         }
         // The root's list, then the children's lists of each node on the way down, each
         // in a region of its parent's length plus one step (a step stores sixteen lanes).
-        if arena.len() < n + 16 {
-            arena.resize(n + 16, 0);
-        }
+        arena.reserve(n + 16);
         // Only the rays the set-up found to trace: a done path's slot (listed until the
         // next retirement, and always with coherent groups, which retire none) or a slot
         // without a shadow ray would otherwise take lanes at every node of the root's level.
@@ -908,9 +937,7 @@ mod avx512 {
             let b = &nodes[node as usize + 1];
             let m = e - s;
             let stride = m + 16;
-            if arena.len() < top + 8 * stride {
-                arena.resize(top + 8 * stride, 0);
-            }
+            arena.reserve(top + 8 * stride);
             let base = arena.as_mut_ptr();
             let mut cnt = [0usize; 8];
             // The node's children (a node of fewer than eight has empty slots, which no
@@ -998,7 +1025,8 @@ mod avx512 {
                     let first = child & 0x0fff_ffff;
                     let count = ((child >> 28) & 7) + 1;
                     let from = top + k * stride;
-                    leaf(r, tris, &arena[from..from + cnt[k]], first, count, any);
+                    // SAFETY: the node's step wrote the child's `cnt[k]` entries.
+                    leaf(r, tris, arena.list(from, from + cnt[k]), first, count, any);
                 }
             }
             // Inner children far first, so that the nearest is visited next.

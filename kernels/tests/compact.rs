@@ -53,6 +53,18 @@ fn partition(flags: &[u32], ids: &[u32]) -> (Vec<u32>, u32) {
 
 /// Compacts the first `n` of `flags`/`ids` with kernels launched for `launched >= n` rays.
 fn run(d: &Device, flags: &[u32], ids: &[u32], n: u32, launched: u32) -> (Vec<u32>, u32) {
+    let (out, total, _) = run_words(d, flags, ids, n, launched);
+    (out, total)
+}
+
+/// [`run`], and every word of the scratch buffer after it.
+fn run_words(
+    d: &Device,
+    flags: &[u32],
+    ids: &[u32],
+    n: u32,
+    launched: u32,
+) -> (Vec<u32>, u32, Vec<u32>) {
     let len = launched as usize;
     let flags_buf = d.upload(&flags[..len]).unwrap();
     let ids_buf = d.upload(&ids[..len]).unwrap();
@@ -76,7 +88,35 @@ fn run(d: &Device, flags: &[u32], ids: &[u32], n: u32, launched: u32) -> (Vec<u3
         got[n..].iter().all(|&v| v == SENTINEL),
         "n = {n} (launched {launched}): something was written past element {n}"
     );
-    (got[..n].to_vec(), total)
+    (got[..n].to_vec(), total, d.read(&scratch).unwrap())
+}
+
+/// The cases of [`check`]: (rays, launched size, density of flag 1 in 1/1000).
+fn cases() -> Vec<(u32, u32, u32)> {
+    let mut cases = Vec::new();
+    for &n in SIZES {
+        for &density in DENSITIES {
+            cases.push((n, n, density));
+        }
+    }
+    // `count[0]` smaller than the launched size (the renderer's buffers are sized for
+    // the maximum): the tail must be ignored.
+    cases.push((4097, 5000, 500));
+    cases.push((1, BLOCK * 3 + 5, 500));
+    cases.push((BLOCK * 2, BLOCK * 2 + 1, 700));
+    cases
+}
+
+/// Flags of density `density`/1000 and distinct ids that are not the identity (so that
+/// misplaced ids are caught), `len` of each.
+fn inputs(rng: &mut Rng, len: usize, density: u32) -> (Vec<u32>, Vec<u32>) {
+    let flags = (0..len)
+        .map(|_| ((rng.next() % 1000) < density) as u32)
+        .collect();
+    let ids = (0..len as u32)
+        .map(|i| i.wrapping_mul(2_654_435_761) ^ 0x5555)
+        .collect();
+    (flags, ids)
 }
 
 fn check(kind: BackendKind) {
@@ -89,26 +129,8 @@ fn check(kind: BackendKind) {
         d.info().subgroup_size
     );
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    let mut cases = Vec::new();
-    for &n in SIZES {
-        for &density in DENSITIES {
-            cases.push((n, n, density));
-        }
-    }
-    // `count[0]` smaller than the launched size (the renderer's buffers are sized for
-    // the maximum): the tail must be ignored.
-    cases.push((4097, 5000, 500));
-    cases.push((1, BLOCK * 3 + 5, 500));
-    cases.push((BLOCK * 2, BLOCK * 2 + 1, 700));
-    for (n, launched, density) in cases {
-        let len = launched as usize;
-        let flags: Vec<u32> = (0..len)
-            .map(|_| ((rng.next() % 1000) < density) as u32)
-            .collect();
-        // Distinct ids that are not the identity, so misplaced ids are caught.
-        let ids: Vec<u32> = (0..len as u32)
-            .map(|i| i.wrapping_mul(2_654_435_761) ^ 0x5555)
-            .collect();
+    for (n, launched, density) in cases() {
+        let (flags, ids) = inputs(&mut rng, launched as usize, density);
         let (want, want_total) = partition(&flags[..n as usize], &ids[..n as usize]);
         let (got, total) = run(&d, &flags, &ids, n, launched);
         assert_eq!(
@@ -225,10 +247,34 @@ fn compaction_vulkan() {
     check_retire(BackendKind::Vulkan);
 }
 
-/// The native CPU backend runs the same kernels (subgroup scans, barriers and workgroup
-/// memory included) with its 32-wide subgroups.
+/// The native CPU backend runs the kernels as whole-dispatch loops by default.
 #[test]
 fn compaction_cpu() {
     check(BackendKind::Cpu);
     check_retire(BackendKind::Cpu);
+}
+
+/// On the CPU backend, the kernels' whole-dispatch loops write what their host forms
+/// (subgroup scans, barriers and workgroup memory, 32-wide subgroups) write: the same
+/// partition, total and scratch words, in every case of [`check`].
+#[test]
+fn compaction_cpu_whole_dispatches_write_the_host_forms_words() {
+    use cohort::runtime::cpu::simd::Forms;
+    let whole = Device::cpu_with(Forms::Measured).unwrap();
+    let host = Device::cpu_with(Forms::Host).unwrap();
+    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    for (n, launched, density) in cases() {
+        let (flags, ids) = inputs(&mut rng, launched as usize, density);
+        let a = run_words(&whole, &flags, &ids, n, launched);
+        let b = run_words(&host, &flags, &ids, n, launched);
+        assert_eq!(
+            a, b,
+            "n = {n} (launched {launched}), density {density}/1000"
+        );
+    }
+    let counts = whole.form_counts();
+    for k in ["compact_count", "compact_offsets", "compact_scatter"] {
+        let c = counts.iter().find(|c| c.kernel.starts_with(k)).expect(k);
+        assert!(c.whole > 0 && c.host == 0, "{k} ran {c:?}");
+    }
 }

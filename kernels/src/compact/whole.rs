@@ -1,0 +1,169 @@
+//! The CPU backend's whole-dispatch forms of the three compaction kernels
+//! (`cohort::runtime::cpu::DispatchForm`): each dispatch runs as one loop on one thread,
+//! writing what the kernel's invocations write, word for word.
+//!
+//! Why: the kernels' subgroup scans and workgroup barriers leave them without a vector
+//! form, and their host form runs each workgroup's 256 invocations as coroutines that
+//! switch at every barrier. A render's retirements of finished slots (`crate::retire`)
+//! spent 11-12 ms of a 560 ms stanford-like render there (the first `compact_count`
+//! alone 4.7 ms), for partitions of at most 65536 slots that a loop does in tens of
+//! microseconds.
+//!
+//! Buffers are read and written through bounds-checked raw views, never as references:
+//! a dispatch may bind one buffer twice, as it may on a GPU. An index out of bounds panics,
+//! as the host form's would, and the backend reports it as the dispatch's error.
+
+use super::{block_count, BLOCK, PER_THREAD, WG, WORDS};
+use cohort::runtime::cpu::LaneArgs;
+
+/// A bound buffer of `u32`s, read and written by index.
+#[derive(Clone, Copy)]
+struct Words {
+    ptr: *mut u32,
+    len: usize,
+    /// Its parameter's name, for the panic message of an index out of bounds.
+    name: &'static str,
+}
+
+impl Words {
+    /// Storage parameter `i` of the dispatch.
+    ///
+    /// # Safety
+    /// Buffer `i` holds `u32`s (the backend binds the kernel's buffers in parameter order).
+    unsafe fn bound(a: &LaneArgs<'_>, i: usize, name: &'static str) -> Words {
+        let s = a.storage_mut::<u32>(i);
+        Words {
+            ptr: s as *mut u32,
+            len: s.len(),
+            name,
+        }
+    }
+
+    fn check(&self, i: usize) {
+        assert!(
+            i < self.len,
+            "index out of bounds: `{}` has {} elements but the index is {i}",
+            self.name,
+            self.len
+        );
+    }
+
+    fn get(&self, i: usize) -> u32 {
+        self.check(i);
+        // SAFETY: in bounds; the buffer stays bound for the dispatch.
+        unsafe { self.ptr.add(i).read() }
+    }
+
+    fn set(&self, i: usize, v: u32) {
+        self.check(i);
+        // SAFETY: as for `get`.
+        unsafe { self.ptr.add(i).write(v) }
+    }
+}
+
+/// Workgroups of a dispatch of `invocations` (the kernels' workgroup is [`WG`]).
+fn groups(invocations: u64) -> u32 {
+    (invocations / u64::from(WG)).min(u64::from(u32::MAX)) as u32
+}
+
+/// `compact_count`: each block's column words (bit `j` of word `c`: the flag of ray
+/// `j * WG + c`) and, after all of them, its count of flags.
+/// Buffers: count, flags, scratch.
+#[doc(hidden)]
+pub fn compact_count_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
+    // SAFETY: the backend binds compact_count's buffers in parameter order.
+    let (count, flags, scratch) = unsafe {
+        (
+            Words::bound(a, 0, "count"),
+            Words::bound(a, 1, "flags"),
+            Words::bound(a, 2, "scratch"),
+        )
+    };
+    let n = count.get(0);
+    let blocks = block_count(n);
+    for wg in 0..groups(invocations).min(blocks) {
+        let mut sum = 0u32;
+        for li in 0..WG {
+            let base = wg * BLOCK + li;
+            let mut col = 0u32;
+            for j in 0..PER_THREAD {
+                let g = base + j * WG;
+                if g < n {
+                    col |= u32::from(flags.get(g as usize) != 0) << j;
+                }
+            }
+            scratch.set((wg * WORDS + li) as usize, col);
+            sum += col.count_ones();
+        }
+        scratch.set((blocks * WORDS + wg) as usize, sum);
+    }
+    true
+}
+
+/// `compact_offsets`: the block counts turned into exclusive offsets in place, and the
+/// total. Buffers: count, scratch, total.
+#[doc(hidden)]
+pub fn compact_offsets_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
+    // SAFETY: the backend binds compact_offsets' buffers in parameter order.
+    let (count, scratch, total) = unsafe {
+        (
+            Words::bound(a, 0, "count"),
+            Words::bound(a, 1, "scratch"),
+            Words::bound(a, 2, "total"),
+        )
+    };
+    if groups(invocations) == 0 {
+        return true;
+    }
+    let blocks = block_count(count.get(0));
+    let sums = (blocks * WORDS) as usize;
+    let mut run = 0u32;
+    for b in 0..blocks as usize {
+        let s = scratch.get(sums + b);
+        scratch.set(sums + b, run);
+        run = run.wrapping_add(s);
+    }
+    total.set(0, run);
+    true
+}
+
+/// `compact_scatter`: every ray's id moved to its place in the stable partition (flag 1
+/// first, after the ones before it; flag 0 after all the ones and the zeros before it).
+/// Buffers: count, scratch, total, idrays, out.
+#[doc(hidden)]
+pub fn compact_scatter_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
+    // SAFETY: the backend binds compact_scatter's buffers in parameter order.
+    let (count, scratch, total, idrays, out) = unsafe {
+        (
+            Words::bound(a, 0, "count"),
+            Words::bound(a, 1, "scratch"),
+            Words::bound(a, 2, "total"),
+            Words::bound(a, 3, "idrays"),
+            Words::bound(a, 4, "out"),
+        )
+    };
+    let n = count.get(0);
+    let blocks = block_count(n);
+    let wgs = groups(invocations).min(blocks);
+    if wgs == 0 {
+        return true;
+    }
+    let alive = total.get(0);
+    for wg in 0..wgs {
+        let mut ones = scratch.get((blocks * WORDS + wg) as usize);
+        let base = wg * BLOCK;
+        // Rays in order: ray `e` of the block is bit `e / WG` of column word `e % WG`.
+        for e in 0..BLOCK.min(n - base) {
+            let g = base + e;
+            let col = scratch.get((wg * WORDS + e % WG) as usize);
+            let dst = if (col >> (e / WG)) & 1 != 0 {
+                ones += 1;
+                ones - 1
+            } else {
+                alive.wrapping_add(g).wrapping_sub(ones)
+            };
+            out.set(dst as usize, idrays.get(g as usize));
+        }
+    }
+    true
+}
