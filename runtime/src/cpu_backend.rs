@@ -272,7 +272,8 @@ impl CpuDevice {
         let vector = match (simd, cmd.host) {
             (Some(_), None) => true,
             (Some(_), Some(_)) => {
-                self.forms == cpu::simd::Forms::Vector || self.chooser.vector_next(&cmd.name)
+                self.forms == cpu::simd::Forms::Vector
+                    || self.chooser.vector_next(&cmd.name, simd.map(|k| k.key))
             }
             _ => false,
         };
@@ -297,8 +298,9 @@ impl CpuDevice {
             );
             let ns = start.elapsed().as_nanos() as u64;
             match (ready, &cmd.code) {
-                (cpu::simd::Ready::Vector(_), _) if cmd.host.is_some() => {
-                    self.chooser.record(&cmd.name, vector, ns, invocations)
+                (cpu::simd::Ready::Vector(k), _) if cmd.host.is_some() => {
+                    self.chooser
+                        .record(&cmd.name, Some(k.key), vector, ns, invocations)
                 }
                 (cpu::simd::Ready::NotYet, Some(k)) => cpu::simd::ran_host(k, self.lanes, ns),
                 _ => {}

@@ -13,6 +13,12 @@
 //! against the geometric mean of its neighbours, which cancels a steady drift. (With a
 //! running average of each form's own timings instead, the traversal of stanford-like ran
 //! its slower vector form in up to half of its dispatches: 112 of 242 in one render.)
+//!
+//! The estimate is kept beside the vector form's object in the cache (`{key}.verdict`), so
+//! a later run on this machine starts from it: it runs the faster form from its first
+//! dispatch and explores the other at the usual rate, skipping the alternation (whose
+//! host dispatches cost a 256x256 render about 20 ms of 300-530). Its sandwiches then
+//! refine the estimate as before, which corrects one carried over from another scene.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -72,6 +78,10 @@ struct Trial {
     dispatches: u64,
     /// The form last reported faster (for the log).
     faster: Option<bool>,
+    /// Whether `log_ratio` started from an earlier run's estimate (no alternation).
+    prior: bool,
+    /// The estimate as last kept on disk.
+    saved: Option<f64>,
 }
 
 impl Trial {
@@ -170,6 +180,9 @@ impl FormCounts {
     }
 }
 
+/// A kept estimate is rewritten once it has moved by this much (ln of the ratio).
+const SAVE_STEP: f64 = 0.02;
+
 /// The measured choices of one device, by kernel name.
 #[derive(Default)]
 pub struct Chooser {
@@ -179,15 +192,36 @@ pub struct Chooser {
 impl Chooser {
     /// Whether the next dispatch of `kernel` runs its vector form: each form until it has
     /// an estimate, then the faster one, and every [`Trial::explore_every`]-th dispatch
-    /// the other.
-    pub fn vector_next(&self, kernel: &str) -> bool {
-        let t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
-        let Some(tr) = t.get(kernel) else {
-            return true;
-        };
+    /// the other. `key` is the vector form's cache key: the estimate kept under it by an
+    /// earlier run, if any, is the starting one.
+    pub fn vector_next(&self, kernel: &str, key: Option<u64>) -> bool {
+        self.next_with(kernel, || key.and_then(super::llvm::verdict))
+    }
+
+    /// [`Chooser::vector_next`] with the kept estimate from `prior`, read on the kernel's
+    /// first dispatch.
+    fn next_with(&self, kernel: &str, prior: impl FnOnce() -> Option<f64>) -> bool {
+        let mut t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
+        let tr = t.entry(kernel.to_string()).or_insert_with(|| {
+            let log_ratio = prior();
+            if let (Some(r), true) = (log_ratio, super::log()) {
+                eprintln!(
+                    "cohort: `{kernel}`: vector form {:.3}x the host form's time in an earlier run: starts with its {} form",
+                    r.exp(),
+                    if r <= 0.0 { "vector" } else { "host" }
+                );
+            }
+            Trial {
+                log_ratio,
+                prior: log_ratio.is_some(),
+                saved: log_ratio,
+                faster: log_ratio.map(|r| r <= 0.0),
+                ..Default::default()
+            }
+        });
         match tr.vector_faster() {
             // Alternating, from the vector form: a sandwich completes on every dispatch.
-            Some(_) if tr.dispatches < ALTERNATE => tr.dispatches % 2 == 0,
+            Some(_) if tr.dispatches < ALTERNATE && !tr.prior => tr.dispatches % 2 == 0,
             None => tr.dispatches % 2 == 0,
             Some(v) => {
                 let every = tr.explore_every();
@@ -196,8 +230,18 @@ impl Chooser {
         }
     }
 
-    /// Records a timed dispatch of `kernel` in the vector form (`vector`) or the host form.
-    pub fn record(&self, kernel: &str, vector: bool, ns: u64, invocations: u64) {
+    /// Records a timed dispatch of `kernel` in the vector form (`vector`) or the host form;
+    /// keeps the estimate under `key` (the vector form's cache key) when it has moved.
+    pub fn record(&self, kernel: &str, key: Option<u64>, vector: bool, ns: u64, invocations: u64) {
+        let save = self.record_ns(kernel, vector, ns, invocations);
+        if let (Some(key), Some(r)) = (key, save) {
+            super::llvm::save_verdict(key, r);
+        }
+    }
+
+    /// [`Chooser::record`] without the disk: the estimate to keep, if it moved by
+    /// [`SAVE_STEP`] since it was last kept.
+    fn record_ns(&self, kernel: &str, vector: bool, ns: u64, invocations: u64) -> Option<f64> {
         let mut t = self.trials.lock().unwrap_or_else(|e| e.into_inner());
         let tr = t.entry(kernel.to_string()).or_default();
         let x = (ns.max(1) as f64 / invocations.max(1) as f64).ln();
@@ -230,6 +274,14 @@ impl Chooser {
                 );
             }
         }
+        match (tr.log_ratio, tr.saved) {
+            (Some(r), Some(s)) if (r - s).abs() < SAVE_STEP => None,
+            (Some(r), _) => {
+                tr.saved = Some(r);
+                Some(r)
+            }
+            (None, _) => None,
+        }
     }
 }
 
@@ -261,11 +313,11 @@ mod tests {
     fn vector_runs(c: &Chooser, n: u64, ns: impl Fn(u64, bool) -> f64) -> u64 {
         let mut vector = 0;
         for d in 0..n {
-            let v = c.vector_next("k");
+            let v = c.vector_next("k", None);
             if d >= ALTERNATE {
                 vector += u64::from(v);
             }
-            c.record("k", v, ns(d, v) as u64, 1);
+            c.record("k", None, v, ns(d, v) as u64, 1);
         }
         vector
     }
@@ -276,17 +328,17 @@ mod tests {
         // The first seven dispatches alternate, from the vector form.
         let mut order = Vec::new();
         for _ in 0..ALTERNATE {
-            let v = c.vector_next("k");
+            let v = c.vector_next("k", None);
             order.push(v);
-            c.record("k", v, if v { 100 } else { 240 }, 1);
+            c.record("k", None, v, if v { 100 } else { 240 }, 1);
         }
         assert_eq!(order, [true, false, true, false, true, false, true]);
         // Vector is 2.4x faster: it runs, except once in 70 dispatches.
         let mut host_runs = 0;
         for _ in 0..700 {
-            let v = c.vector_next("k");
+            let v = c.vector_next("k", None);
             host_runs += usize::from(!v);
-            c.record("k", v, if v { 100 } else { 240 }, 1);
+            c.record("k", None, v, if v { 100 } else { 240 }, 1);
         }
         assert_eq!(host_runs, 10);
     }
@@ -314,5 +366,65 @@ mod tests {
             v >= (n - ALTERNATE) - (n - ALTERNATE) / 16 - 1,
             "vector ran {v} times"
         );
+    }
+
+    /// Runs `n` dispatches of kernel "k" starting from the kept estimate `prior`; returns
+    /// each dispatch's form and the estimates that were to be kept, in order.
+    fn with_prior(prior: f64, n: u64, ns: impl Fn(bool) -> f64) -> (Vec<bool>, Vec<f64>) {
+        let c = Chooser::default();
+        let (mut forms, mut kept) = (Vec::new(), Vec::new());
+        for _ in 0..n {
+            let v = c.next_with("k", || Some(prior));
+            forms.push(v);
+            kept.extend(c.record_ns("k", v, ns(v) as u64, 1));
+        }
+        (forms, kept)
+    }
+
+    #[test]
+    fn an_earlier_estimate_skips_the_alternation() {
+        // Kept: vector 2.4x faster. The host form runs first at its exploration (one in
+        // 70), not in an alternation.
+        let (forms, kept) = with_prior(
+            (100.0f64 / 240.0).ln(),
+            140,
+            |v| {
+                if v {
+                    100.0
+                } else {
+                    240.0
+                }
+            },
+        );
+        let host: Vec<usize> = (0..forms.len()).filter(|&d| !forms[d]).collect();
+        assert_eq!(host, [69, 139]);
+        // The first host dispatch warms up and gives no sandwich, so nothing new is kept.
+        assert!(kept.is_empty(), "{kept:?}");
+    }
+
+    #[test]
+    fn a_wrong_earlier_estimate_is_corrected_and_kept() {
+        // Kept: vector 1.3x faster; in this run it is 1.3x slower. The sandwiches around
+        // the explorations turn the estimate within a few of them; then the host form
+        // runs but for its explorations.
+        let (forms, kept) = with_prior(-(1.3f64.ln()), 400, |v| if v { 130.0 } else { 100.0 });
+        let late_vector = forms[100..].iter().filter(|&&v| v).count();
+        assert!(
+            late_vector <= 300 / 16 + 1,
+            "vector ran {late_vector} times"
+        );
+        // What was kept moved towards, and ended near, this run's ratio.
+        let last = *kept.last().expect("an estimate was kept");
+        assert!(
+            kept.len() >= 2 && (last - 1.3f64.ln()).abs() < 0.1,
+            "{kept:?}"
+        );
+        // Each kept estimate moved by at least SAVE_STEP from the one kept before it.
+        let mut before = vec![-(1.3f64.ln())];
+        before.extend(&kept[..kept.len() - 1]);
+        assert!(before
+            .iter()
+            .zip(&kept)
+            .all(|(a, b)| (b - a).abs() >= SAVE_STEP));
     }
 }

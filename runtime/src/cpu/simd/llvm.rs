@@ -497,6 +497,26 @@ fn host_time_file(key: u64) -> Option<std::path::PathBuf> {
     crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.host-ns")))
 }
 
+/// Where the measured ratio of a kernel's forms (`Chooser`) is kept for its vector form
+/// with key `key`.
+fn verdict_file(key: u64) -> Option<std::path::PathBuf> {
+    crate::cache_dir().map(|d| d.join("cpu-vector").join(format!("{key:016x}.verdict")))
+}
+
+/// ln(vector time / host time) as [`save_verdict`] last kept it, if it did.
+pub fn verdict(key: u64) -> Option<f64> {
+    verdict_file(key)
+        .and_then(|p| std::fs::read(p).ok())
+        .and_then(|b| b.try_into().ok())
+        .map(f64::from_le_bytes)
+        .filter(|r| r.is_finite())
+}
+
+/// Keeps a kernel's measured ratio of forms, for the next run on this machine.
+pub fn save_verdict(key: u64, log_ratio: f64) {
+    crate::disk_cache::save(&verdict_file(key), &log_ratio.to_le_bytes());
+}
+
 /// The time, in nanoseconds, recorded by [`save_host_time`] (0 if none).
 pub fn host_time(key: u64) -> u64 {
     host_time_file(key)

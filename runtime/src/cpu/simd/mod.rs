@@ -46,6 +46,9 @@ type RunFn = unsafe extern "C" fn(*const EnvEntry, *mut u32, u32, u32, u32, u32,
 #[derive(Clone, Copy, Debug)]
 pub struct SimdKernel {
     run: RunFn,
+    /// Its object cache key: what the forms' measured ratio is kept under between runs
+    /// ([`Chooser`]).
+    pub key: u64,
 }
 
 impl SimdKernel {
@@ -252,7 +255,7 @@ fn probe(k: &CompiledKernel, lanes: u32) -> State {
             saved_ns: host_ns,
         };
     };
-    let r = r.map(entry);
+    let r = r.map(|addr| entry(addr, key));
     if log() {
         if let Ok(v) = &r {
             eprintln!(
@@ -309,11 +312,11 @@ fn build(k: &CompiledKernel, ir: &str) -> Result<(SimdKernel, std::time::Duratio
             k.name, k.location
         )
     })?;
-    Ok((entry(addr), took))
+    Ok((entry(addr, jit.key(ir)), took))
 }
 
-fn entry(addr: usize) -> SimdKernel {
+fn entry(addr: usize, key: u64) -> SimdKernel {
     // SAFETY: the entry is defined by `lower::driver` with exactly `RunFn`'s signature.
     let run = unsafe { std::mem::transmute::<usize, RunFn>(addr) };
-    SimdKernel { run }
+    SimdKernel { run, key }
 }
