@@ -28,6 +28,7 @@ use crate::layout::{Frame, Triangle, DONE, MISS, SLOT_IDLE};
 use crate::traverse_wide::WideNode;
 use cohort::runtime::cpu::LaneArgs;
 use glam::{UVec4, Vec4};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 mod balance;
 
@@ -223,7 +224,7 @@ fn trace_slots(
     done: impl Fn(&Rays, &[u32]) + Sync,
 ) {
     use rayon::prelude::*;
-    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::atomic::AtomicU64;
     if slots.is_empty() {
         return;
     }
@@ -233,9 +234,12 @@ fn trace_slots(
     // Cut at whole steps, so that a list in slot order keeps its steps of consecutive slots.
     let cuts = balance::cuts(any, slots.len(), streams, 16);
     let nanos: Vec<AtomicU64> = (0..streams).map(|_| AtomicU64::new(0)).collect();
+    let (started, finished) = (AtomicUsize::new(0), AtomicUsize::new(0));
     (0..streams).into_par_iter().for_each(|k| {
+        started.fetch_add(1, Ordering::Relaxed);
         let part = &slots[cuts[k]..cuts[k + 1]];
         if part.is_empty() {
+            finished.fetch_add(1, Ordering::Release);
             return;
         }
         let start = std::time::Instant::now();
@@ -250,6 +254,8 @@ fn trace_slots(
             done(&st.rays, part);
         });
         nanos[k].store(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        finished.fetch_add(1, Ordering::Release);
+        wait_for_streams(&started, &finished, streams);
     });
     if streams > 1 {
         let seconds: Vec<f64> = nanos
@@ -257,6 +263,25 @@ fn trace_slots(
             .map(|n| n.load(Ordering::Relaxed) as f64 * 1e-9)
             .collect();
         balance::record(any, &cuts, slots.len(), &seconds);
+    }
+}
+
+/// The longest a thread that has finished its stream waits, awake, for the others.
+const WAIT_AWAKE: std::time::Duration = std::time::Duration::from_millis(2);
+
+/// Once every stream has started, a thread that finished its own stays awake until the
+/// others finish (yielding its core to any other runnable thread), up to [`WAIT_AWAKE`].
+/// Returned to the pool, it would fall asleep within microseconds while the dispatch waits
+/// on the last stream, and waking it costs the dispatch: on the 2-core virtual machine of
+/// BENCHMARKS.md the traversals ended 130-190 us after their last stream (a fifth of a
+/// 256x256 iteration's traversal, two fifths of its shadow rays').
+fn wait_for_streams(started: &AtomicUsize, finished: &AtomicUsize, streams: usize) {
+    let since = std::time::Instant::now();
+    while started.load(Ordering::Relaxed) == streams
+        && finished.load(Ordering::Acquire) < streams
+        && since.elapsed() < WAIT_AWAKE
+    {
+        std::thread::yield_now();
     }
 }
 

@@ -7,8 +7,9 @@
 
 use std::cell::{RefCell, UnsafeCell};
 use std::panic::AssertUnwindSafe;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
@@ -184,7 +185,13 @@ impl CpuDevice {
         // outside, each dispatch's parallel loop would put this thread to sleep until the
         // pool finished it and then wake it, and wake the pool's idle threads for the next
         // one, a futex round trip per dispatch that kept the cores 7 % idle in a render.
-        let stats = rayon::scope(|_| {
+        let awake = &Awake::default();
+        let stats = rayon::scope(|s| {
+            let _done = awake.until_dropped();
+            let submitter = rayon::current_thread_index();
+            for _ in 1..rayon::current_num_threads() {
+                s.spawn(move |_| awake.keep(submitter));
+            }
             let mut stats = Vec::with_capacity(cmds.len());
             for cmd in &cmds {
                 let start = Instant::now();
@@ -204,6 +211,58 @@ impl CpuDevice {
             })
             .collect();
         Ok((stats, reads))
+    }
+}
+
+/// The pool's other threads kept awake for a submission. Between two dispatches, and
+/// inside one whose parallel loop has fewer pieces than threads, a thread that finds no
+/// work goes to sleep within microseconds, and the next dispatch waits for it to wake: on
+/// the 2-core virtual machine of BENCHMARKS.md the second thread began a traversal's
+/// second stream 10-60 us after the first (a dispatch of a 256x256 iteration takes
+/// 0.5-1.3 ms). So each other thread runs [`Awake::keep`] for the submission's length,
+/// taking the dispatches' work as it comes (and giving its core to any other runnable
+/// thread while there is none).
+#[derive(Default)]
+struct Awake(AtomicBool);
+
+/// A thread in [`Awake::keep`] that has found no work for this long goes back to the
+/// pool. A submission's dispatches follow each other within microseconds, so this ends
+/// only waits that were not worth keeping: and it ends any wait that blocks others (a
+/// thread can pick up a `keep` while it waits inside a job of another submission, which
+/// could then wait on this one).
+const AWAKE_IDLE: Duration = Duration::from_millis(1);
+
+/// Ends the submission's [`Awake::keep`] loops when dropped, on return or unwind.
+struct AwakeUntil<'a>(&'a Awake);
+
+impl Drop for AwakeUntil<'_> {
+    fn drop(&mut self) {
+        self.0 .0.store(true, Ordering::Release);
+    }
+}
+
+impl Awake {
+    fn until_dropped(&self) -> AwakeUntil<'_> {
+        AwakeUntil(self)
+    }
+
+    /// Runs the pool's work until the submission ends or none comes for [`AWAKE_IDLE`].
+    /// Not on the submitting thread (`submitter`), which can pick this job up while it
+    /// waits inside a dispatch.
+    fn keep(&self, submitter: Option<usize>) {
+        if rayon::current_thread_index() == submitter {
+            return;
+        }
+        let mut worked = Instant::now();
+        while !self.0.load(Ordering::Acquire) {
+            if rayon::yield_now() == Some(rayon::Yield::Executed) {
+                worked = Instant::now();
+            } else if worked.elapsed() > AWAKE_IDLE {
+                return;
+            } else {
+                std::thread::yield_now();
+            }
+        }
     }
 }
 
