@@ -457,6 +457,7 @@ impl<'d> Renderer<'d> {
         // Lists this short are not worth a retirement's four dispatches.
         const RETIRE_FROM: u32 = 256;
         let retires = self.opts.retires(draws_per_lane(self.device));
+        let retire_at = retire_at(self.device);
         let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
             // Submit while fewer than IN_FLIGHT batches run and what is known (finished
@@ -528,13 +529,13 @@ impl<'d> Renderer<'d> {
                         listed: run.listed,
                         tabled: run.tabled == Some(self.frame.iteration),
                     };
-                    // Once at most three quarters of the listed slots are live, list only
+                    // Once at most `retire_at` of the listed slots are live, list only
                     // those: the slots finished since the last read-back stay listed (and
                     // skipped) until the next retirement, so `live` bounds the new list.
-                    // On an H200, half measured about 1 % slower than three quarters and
-                    // nine tenths 0.5 % faster; on the CPU backend nine tenths spends
-                    // 10-15 ms more of a 256x256 render in the partition (BENCHMARKS.md).
-                    if retires && run.live * 4 <= run.listed as u64 * 3 && run.listed > RETIRE_FROM
+                    let (num, den) = retire_at;
+                    if retires
+                        && run.live * den <= run.listed as u64 * num
+                        && run.listed > RETIRE_FROM
                     {
                         run.cur = wavefront.retire(&mut b, run.cur)?;
                         run.listed = run.live as u32;
@@ -663,6 +664,21 @@ fn apply_options(frame: &mut Frame, opts: &RenderOptions, per_lane: bool) {
     frame.coherent_light = opts.coherent_light as u32;
     frame.light_cells = opts.light_cells;
     frame.group_slots = opts.group_slots(per_lane);
+}
+
+/// The share of the listed slots, as (numerator, denominator), at or below which so many
+/// are live that a retirement pays: a retirement costs a partition of the list, a listed
+/// finished slot costs each stage its skip. On an H200, half measured about 1 % slower
+/// than three quarters and nine tenths 0.5 % faster. On the CPU backend, whose partition
+/// runs as whole-dispatch loops, nineteen twentieths took 0.96x (cornell-box) and 0.975x
+/// (stanford-like) of three quarters' kernel time at 256x256, and ninety-nine hundredths
+/// no less (BENCHMARKS.md).
+fn retire_at(device: &Device) -> (u64, u64) {
+    if device.info().backend == cohort::runtime::BackendKind::Cpu {
+        (19, 20)
+    } else {
+        (3, 4)
+    }
 }
 
 /// Pixel of every ray slot. Interleaved sampling: slot g renders pixel D * Morton(g)
