@@ -272,9 +272,9 @@ const WAIT_AWAKE: std::time::Duration = std::time::Duration::from_millis(2);
 /// Once every stream has started, a thread that finished its own stays awake until the
 /// others finish (yielding its core to any other runnable thread), up to [`WAIT_AWAKE`].
 /// Returned to the pool, it would fall asleep within microseconds while the dispatch waits
-/// on the last stream, and waking it costs the dispatch: on the 2-core virtual machine of
-/// BENCHMARKS.md the traversals ended 130-190 us after their last stream (a fifth of a
-/// 256x256 iteration's traversal, two fifths of its shadow rays').
+/// on the last stream, and the end of the dispatch would then wait for it to wake: in
+/// alternated 256x256 renders on the 2-core virtual machine of BENCHMARKS.md, kernel time
+/// without this wait was 1.058x (cornell-box) and 1.015x (stanford-like) of that with it.
 fn wait_for_streams(started: &AtomicUsize, finished: &AtomicUsize, streams: usize) {
     let since = std::time::Instant::now();
     while started.load(Ordering::Relaxed) == streams

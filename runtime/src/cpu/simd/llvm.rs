@@ -505,11 +505,14 @@ fn verdict_file(key: u64) -> Option<std::path::PathBuf> {
 
 /// ln(vector time / host time) as [`save_verdict`] last kept it, if it did.
 pub fn verdict(key: u64) -> Option<f64> {
-    verdict_file(key)
-        .and_then(|p| std::fs::read(p).ok())
-        .and_then(|b| b.try_into().ok())
+    read_word(verdict_file(key))
         .map(f64::from_le_bytes)
         .filter(|r| r.is_finite())
+}
+
+/// The eight bytes of a cache file that holds one word, if it is there and that long.
+fn read_word(path: Option<std::path::PathBuf>) -> Option<[u8; 8]> {
+    std::fs::read(path?).ok()?.try_into().ok()
 }
 
 /// Keeps a kernel's measured ratio of forms, for the next run on this machine.
@@ -519,10 +522,7 @@ pub fn save_verdict(key: u64, log_ratio: f64) {
 
 /// The time, in nanoseconds, recorded by [`save_host_time`] (0 if none).
 pub fn host_time(key: u64) -> u64 {
-    host_time_file(key)
-        .and_then(|p| std::fs::read(p).ok())
-        .and_then(|b| b.try_into().ok())
-        .map_or(0, u64::from_le_bytes)
+    read_word(host_time_file(key)).map_or(0, u64::from_le_bytes)
 }
 
 /// Keeps the time a kernel's host form has run on this machine.
