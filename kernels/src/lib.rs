@@ -21,6 +21,7 @@
 pub mod bsdf;
 pub mod compact;
 pub mod copy;
+pub mod deal;
 pub mod display;
 pub mod environment;
 pub mod extend;
