@@ -179,25 +179,6 @@ pub enum RouletteChoice {
     Mitsuba,
 }
 
-/// `--deal`: whether retirements deal paths to finished slots (`cohort_render::Deal`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum DealChoice {
-    /// On GPUs, where it was measured to pay; off on the CPU backend and software drivers.
-    Auto,
-    On,
-    Off,
-}
-
-impl DealChoice {
-    pub fn to_render(self) -> cohort_render::Deal {
-        match self {
-            DealChoice::Auto => cohort_render::Deal::Auto,
-            DealChoice::On => cohort_render::Deal::On,
-            DealChoice::Off => cohort_render::Deal::Off,
-        }
-    }
-}
-
 /// `--shading`: how shading is organised (`cohort_render::Shading`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ShadingChoice {

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use choices::{
-    AlgorithmChoice, Backend, DealChoice, DeviceList, InPatchChoice, IntegratorChoice,
-    RouletteChoice, RrChoice, ShadingChoice,
+    AlgorithmChoice, Backend, DeviceList, InPatchChoice, IntegratorChoice, RouletteChoice,
+    RrChoice, ShadingChoice,
 };
 use clap::{Parser, Subcommand};
 use cohort_render::multi_device::{combined_stats, render_on_devices};
@@ -146,13 +146,6 @@ struct RenderArgs {
     /// way, so this is for comparisons of speed.
     #[arg(long)]
     no_retire: bool,
-    /// Deal the paths left to live slots to finished ones at each retirement, so that the
-    /// last iterations of a paths budget keep every slot busy: `auto` (the default) on
-    /// GPUs, where it was measured to pay (BENCHMARKS.md), and not on the CPU backend or a
-    /// software driver, where it did not. The same paths, summed per pixel in another
-    /// order: equal up to float rounding. Not with `--no-retire`.
-    #[arg(long, value_enum, default_value_t = DealChoice::Auto)]
-    deal: DealChoice,
     /// Sort the rays by direction octant and origin cell before the traversal, every K
     /// iterations (0: never, the default). The image is the same; it changes only the
     /// order in which the traversal takes the rays (BENCHMARKS.md: it does not pay).
@@ -298,7 +291,6 @@ impl RenderArgs {
             coherent_glossy: self.coherent_glossy,
             compact: self.compact,
             retire: !self.no_retire,
-            deal: self.deal,
             reorder: self.reorder,
             shading: self.shading,
             integrator: self.integrator,
@@ -605,12 +597,6 @@ fn render(a: RenderArgs) -> Result<(), String> {
         stats.iterations,
         stats.slots
     );
-    if stats.dealt > 0 {
-        println!(
-            "dealt          {} times a finished slot took paths of a live one",
-            stats.dealt
-        );
-    }
     println!(
         "kernel time    {:.1} ms: reorder {:.1}, traverse {:.1}, queue {:.1}, extend {:.1}, shadow {:.1}, compact {:.1}",
         ms(k.total()),
@@ -713,7 +699,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
             "scene": a.scene, "width": w, "height": h, "triangles": scene.triangles.len(),
             "device": info.adapter_name, "backend": info.backend.name(), "algorithm": algorithm.name(),
             "patches_n": a.n, "in_patch": choices::name(&a.in_patch), "group_rr": group_rr, "whole_group_end": whole_group_end, "interleave": a.interleave,
-            "compaction": a.compact, "reorder": a.reorder, "shading_design": choices::name(&a.shading), "queued_iterations": stats.queued_iterations, "dealt": stats.dealt, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
+            "compaction": a.compact, "reorder": a.reorder, "shading_design": choices::name(&a.shading), "queued_iterations": stats.queued_iterations, "seed": a.seed, "integrator": integrator.name(), "coherent_light": a.coherent_light, "light_cells": a.light_cells,
             "shard": shard.to_string(), "devices": device_names,
             "paths_per_pixel": stats.paths_per_pixel(), "completed_paths": stats.completed_paths,
             "iterations": stats.iterations, "rays": stats.rays, "slots": stats.slots,

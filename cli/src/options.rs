@@ -6,8 +6,7 @@
 use cohort_render::{RenderOptions, Roulette};
 
 use crate::choices::{
-    self, AlgorithmChoice, DealChoice, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice,
-    ShadingChoice,
+    self, AlgorithmChoice, InPatchChoice, IntegratorChoice, RouletteChoice, RrChoice, ShadingChoice,
 };
 
 /// The options that select the estimator and the paper's configuration, as the user
@@ -24,7 +23,6 @@ pub struct Config {
     pub coherent_glossy: bool,
     pub compact: bool,
     pub retire: bool,
-    pub deal: DealChoice,
     pub reorder: u32,
     pub shading: ShadingChoice,
     pub integrator: IntegratorChoice,
@@ -48,7 +46,6 @@ pub const NAMES: &[&str] = &[
     "coherent-glossy",
     "compact",
     "retire",
-    "deal",
     "reorder",
     "shading",
     "integrator",
@@ -83,7 +80,6 @@ impl Config {
             "coherent-glossy" => parse_bool(value).map(|v| self.coherent_glossy = v),
             "compact" => parse_bool(value).map(|v| self.compact = v),
             "retire" => parse_bool(value).map(|v| self.retire = v),
-            "deal" => parse(value).map(|v| self.deal = v),
             "reorder" => parse_number(clap::value_parser!(u32), value).map(|v| self.reorder = v),
             "shading" => parse(value).map(|v| self.shading = v),
             "integrator" => parse(value).map(|v| self.integrator = v),
@@ -117,7 +113,6 @@ impl Config {
             "coherent-glossy" => on_off(self.coherent_glossy),
             "compact" => on_off(self.compact),
             "retire" => on_off(self.retire),
-            "deal" => n(&self.deal),
             "reorder" => self.reorder.to_string(),
             "shading" => n(&self.shading),
             "integrator" => n(&self.integrator),
@@ -167,7 +162,6 @@ impl Config {
             seed: self.seed,
             compact: self.compact,
             retire: self.retire,
-            deal: self.deal.to_render(),
             reorder: self.reorder,
             shading: self.shading.to_render(),
             whole_group_end,
@@ -221,7 +215,6 @@ mod tests {
             coherent_glossy: false,
             compact: false,
             retire: true,
-            deal: DealChoice::Auto,
             reorder: 0,
             shading: ShadingChoice::Auto,
             integrator: IntegratorChoice::Nee,

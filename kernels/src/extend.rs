@@ -9,7 +9,6 @@
 
 use crate::bsdf::principled::component;
 use crate::bsdf::{bsdf_light_sampled, bsdf_shade, hit, Draws};
-use crate::deal::path_stride;
 use crate::environment::{environment_pdf, environment_radiance, environment_sample};
 use crate::group_draw::{
     draws_entry, glossy_cell_draw, is_group, light_draw, light_entry, params_entry, patch_key,
@@ -406,9 +405,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
     let mut alive = false;
     let mut pixel = 0u32;
     let mut path = 0u32;
-    // The slot's `state.w` split count (`SPLITS_SHIFT` and up; its `DONE` bit is clear
-    // while its path is active).
-    let mut splits = 0u32;
     // The bounce of the path's next vertex: one more, except after a camera ray passed
     // through an emitter that `hide_emitters` hides.
     let mut next_bounce = 0u32;
@@ -448,7 +444,6 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             active = true;
             pixel = st.x;
             path = st.y;
-            splits = st.w;
             let bounce = st.z;
             next_bounce = bounce + 1;
             let key = stream(f.seed, pixel, path, bounce + 1);
@@ -898,7 +893,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             }
         }
         if alive {
-            state[r] = UVec4::new(pixel, path, next_bounce, splits);
+            state[r] = UVec4::new(pixel, path, next_bounce, 0);
             ray_o[r] = new_o.extend(0.0);
             ray_d[r] = new_d.extend(eta2);
             beta[r] = thr.extend(bsdf_pdf);
@@ -919,9 +914,8 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             // while extend's time on an H200 did not change (BENCHMARKS.md, 2026-11-27,
             // 56c20c1).
             completed[0].fetch_add(1, Ordering::Relaxed);
-            // The slot's next path: the pixel's other slots (its copies, and slots its
-            // paths were dealt to, `crate::deal`) trace those in between.
-            let next = path + path_stride(f, splits);
+            // The copy's next path: the pixel's other copies trace those in between.
+            let next = path + f.copies;
             let mut done = 0u32;
             if f.paths_per_pixel != 0 && next - f.first_path >= f.paths_per_pixel {
                 done = DONE;
@@ -931,7 +925,7 @@ pub fn extend<S: DiffuseSampler, E: PathEnd, I: Integrator>(
             let fs = film_sample(f, film_filter, pixel, key);
             let film = fs.truncate();
             let lens = lens_offset(f, key);
-            state[r] = UVec4::new(pixel, next, 0, done | splits);
+            state[r] = UVec4::new(pixel, next, 0, done);
             ray_o[r] = camera_origin(f, film, lens).extend(0.0);
             ray_d[r] = camera_dir(f, film, lens).extend(1.0);
             beta[r] = camera_beta(fs.w);

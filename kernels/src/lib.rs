@@ -21,7 +21,6 @@
 pub mod bsdf;
 pub mod compact;
 pub mod copy;
-pub mod deal;
 pub mod display;
 pub mod environment;
 pub mod extend;

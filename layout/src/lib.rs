@@ -373,11 +373,8 @@ pub struct DeltaLight {
     pub pad: u32,
 }
 
-/// `state.w` bits of a ray slot: its paths are done.
+/// `state.w` bits of a ray slot.
 pub const DONE: u32 = 1;
-/// `state.w` above this bit: how many times the slot's paths were split with a finished
-/// slot (`cohort_kernels::deal`); it traces every `copies << splits`-th path of its pixel.
-pub const SPLITS_SHIFT: u32 = 1;
 /// Triangle index of a miss in `hit.w`.
 pub const MISS: u32 = 0xffff_ffff;
 /// `shadow_d.w` of a slot after `extend` with next-event estimation (as f32): what the

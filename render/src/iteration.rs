@@ -17,7 +17,7 @@ use cohort_kernels::sampling::DiffuseSampler;
 use cohort_kernels::shading::SHADES_GROUP_TABLE;
 use cohort_kernels::traverse::{trace_shadow, traverse};
 use cohort_kernels::traverse_wide::{trace_shadow8, traverse8};
-use cohort_kernels::{compact, deal, queues, retire};
+use cohort_kernels::{compact, queues, retire};
 
 use crate::kernels::{extend_set, Specs};
 use crate::paths::Paths;
@@ -120,14 +120,12 @@ impl<'a> Wavefront<'a> {
 
     /// Records the retirement of the finished slots from list `cur`
     /// (`cohort_kernels::retire`): the other list receives the slots not done, and its
-    /// count their number. With `deal`, the finished slots then take paths of the live ones
-    /// (`cohort_kernels::deal`) and the list counts them again. Returns the other list's
-    /// index. Not with compaction, whose lists keep every slot.
+    /// count their number. Returns the other list's index. Not with compaction, whose
+    /// lists keep every slot.
     pub(crate) fn retire(
         &self,
         b: &mut LabelledBatch<'_>,
         cur: usize,
-        deal: bool,
     ) -> Result<usize, RenderError> {
         debug_assert!(!self.compaction);
         let p = self.paths;
@@ -146,32 +144,6 @@ impl<'a> Wavefront<'a> {
                 &p.idrays[1 - cur],
             )
         })?;
-        if let Some(dealt) = p.deal.as_ref().filter(|_| deal) {
-            let slots = deal::Slots {
-                film_filter: &p.film_filter,
-                state: &p.state,
-                ray_o: &p.ray_o,
-                ray_d: &p.ray_d,
-                beta: &p.beta,
-                radiance: &p.radiance,
-                accum: &p.accum,
-                segment_first: &dealt.segment_first,
-                deposits: &dealt.deposits,
-                completed: &p.counters,
-            };
-            b.stage(Stage::Compact, |b| {
-                deal::record(
-                    b,
-                    &self.specs.deal,
-                    self.listed,
-                    self.frame,
-                    &p.counts[cur],
-                    &p.counts[1 - cur],
-                    &p.idrays[1 - cur],
-                    &slots,
-                )
-            })?;
-        }
         Ok(1 - cur)
     }
 

@@ -8,7 +8,6 @@ use std::time::{Duration, Instant};
 
 use cohort::runtime::{BackendKind, Device, KernelArtifact};
 use cohort_kernels::compact;
-use cohort_kernels::deal;
 use cohort_kernels::extend::{extend, init_paths};
 use cohort_kernels::group_draw::{self, draw_groups};
 use cohort_kernels::integrator::{Implicit, Integrator, NextEvent};
@@ -67,7 +66,6 @@ pub(crate) struct Specs {
     pub(crate) compact: compact::Specs,
     /// `cohort_kernels::retire::mark_live` (the partition is `compact`'s).
     pub(crate) live: cohort::Spec,
-    pub(crate) deal: deal::Specs,
     pub(crate) reorder: reorder::Specs,
     pub(crate) queues: queues::Specs,
     /// `cohort_kernels::group_draw::draw_groups`.
@@ -131,7 +129,6 @@ impl Specs {
             shadow8: trace_shadow8::spec(d, None),
             compact: compact::specs(d),
             live: retire::spec(d),
-            deal: deal::Specs::new(d),
             reorder: reorder::specs(d),
             queues: queues::specs(d),
             groups: draw_groups::spec(d, None),
@@ -318,9 +315,6 @@ impl TypedOp for Compile<'_> {
             builds.push(Box::new(|| {
                 Ok(retire::artifacts(&specs.live, &specs.compact)?)
             }));
-        }
-        if o.deals(d) {
-            builds.push(Box::new(|| Ok(specs.deal.artifacts()?)));
         }
         if reorder {
             builds.push(Box::new(|| Ok(reorder::artifacts(&specs.reorder)?)));

@@ -32,8 +32,8 @@ pub use cohort_kernels::shading;
 pub use gpu_scene::{GpuScene, PreparedScene, SceneBvh};
 pub use image::Image;
 pub use renderer::{
-    Algorithm, Budget, Deal, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError,
-    RenderOptions, RenderStats, Renderer, Shading,
+    Algorithm, Budget, HostTimes, InPatch, IntegratorKind, KernelTimes, RenderError, RenderOptions,
+    RenderStats, Renderer, Shading,
 };
 pub use roulette::Roulette;
 pub use shard::Shard;

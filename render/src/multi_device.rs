@@ -85,7 +85,6 @@ pub fn combined_stats(per_device: &[RenderStats]) -> RenderStats {
         all.rays += s.rays;
         all.kernel += s.kernel;
         all.queued_iterations = all.queued_iterations.max(s.queued_iterations);
-        all.dealt += s.dealt;
         all.wall = all.wall.max(s.wall);
         all.host.record += s.host.record;
         all.host.submit += s.host.submit;

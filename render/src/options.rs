@@ -120,13 +120,6 @@ pub struct RenderOptions {
     /// ([`Self::retires`]); false keeps every slot listed, for comparisons. The image is
     /// the same either way.
     pub retire: bool,
-    /// Whether a retirement deals the remaining paths of live slots to finished ones
-    /// (`cohort_kernels::deal`), so that the last iterations of a paths budget keep the
-    /// list full. Only where the renderer retires ([`Self::retires`]) and under a paths
-    /// budget. The same paths, each pixel's summed in another order: the image is equal
-    /// up to float rounding (`crate::merge::merge_tolerance`). `Renderer::display` needs
-    /// a run without it.
-    pub deal: Deal,
     /// How shading is organised: one kernel, material queues, or the faster of the two
     /// measured on the render (the default).
     pub shading: Shading,
@@ -211,21 +204,6 @@ impl RenderOptions {
                 || (self.algorithm.group == Group::Grid && self.whole_group_end.is_none()))
     }
 
-    /// Whether retirements on `device` deal paths to finished slots
-    /// (`cohort_kernels::deal`; [`Self::deal`]). A time budget never finishes a slot, so
-    /// it never deals whatever this says.
-    pub(crate) fn deals(&self, device: &cohort::runtime::Device) -> bool {
-        let on = match self.deal {
-            Deal::Auto => {
-                let info = device.info();
-                info.backend != cohort::runtime::BackendKind::Cpu && !info.software_driver
-            }
-            Deal::On => true,
-            Deal::Off => false,
-        };
-        on && self.retires(crate::renderer::draws_per_lane(device))
-    }
-
     /// The paths of every pixel this run renders: (first path index, how many; 0 for a
     /// time budget, which never stops a pixel).
     pub(crate) fn path_range(&self) -> (u32, u32) {
@@ -245,17 +223,6 @@ impl RenderOptions {
             time => time,
         }
     }
-}
-
-/// Whether retirements deal paths to finished slots ([`RenderOptions::deal`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Deal {
-    /// On a GPU, where it was measured to pay (BENCHMARKS.md, "Dealing paths to finished
-    /// slots"); off on the CPU backend and software drivers, where it did not.
-    #[default]
-    Auto,
-    On,
-    Off,
 }
 
 /// How shading is organised (`crate::design`).
@@ -292,7 +259,6 @@ impl Default for RenderOptions {
             compact: true,
             reorder: 0,
             retire: true,
-            deal: Deal::Auto,
             shading: Shading::Auto,
             rr_continue: 0.8,
             roulette: Roulette::Fixed,

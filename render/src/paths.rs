@@ -2,7 +2,7 @@
 //! and ray reordering's buffers ([`SortState`]).
 
 use cohort::runtime::{Device, GpuBuffer};
-use cohort_kernels::{compact, deal, group_draw, reorder};
+use cohort_kernels::{compact, group_draw, reorder};
 use cohort_scenes::Camera;
 use glam::{UVec4, Vec4};
 
@@ -38,11 +38,8 @@ pub(crate) struct Paths {
     pub(crate) counts: [GpuBuffer<u32>; 2],
     pub(crate) block_sums: GpuBuffer<u32>,
     pub(crate) total: GpuBuffer<u32>,
-    /// [completed paths, slots done, deposit records, deposit records before the
-    /// retirement] (`cohort_kernels::deal`)
+    /// [completed paths, slots done]
     pub(crate) counters: GpuBuffer<u32>,
-    /// Dealing's buffers, allocated by the first run that deals.
-    pub(crate) deal: Option<DealState>,
     /// Each slot group's draws of the iteration and the next (`cohort_kernels::group_draw`),
     /// sized by the first run whose `extend` reads them (`SHADES_GROUP_TABLE`); one
     /// unread group before, which `extend` binds all the same.
@@ -82,36 +79,9 @@ impl Paths {
             counts: [device.upload(&[n as u32])?, device.upload(&[n as u32])?],
             block_sums: device.alloc(blocks)?,
             total: device.alloc(1)?,
-            counters: device.alloc(4)?,
-            deal: None,
+            counters: device.alloc(2)?,
             group_table: device.alloc(group_draw::table_len(1))?,
         })
-    }
-}
-
-/// Dealing's buffers (`cohort_kernels::deal`): each slot's first path of its current
-/// sum, and the sums that slots deposited when dealt another pixel.
-pub(crate) struct DealState {
-    pub(crate) segment_first: GpuBuffer<u32>,
-    pub(crate) deposits: GpuBuffer<Vec4>,
-}
-
-impl DealState {
-    /// The buffers of `slots` slots that trace at most `paths_per_slot` paths each.
-    pub(crate) fn new(
-        d: &Device,
-        slots: u32,
-        paths_per_slot: u32,
-    ) -> Result<DealState, RenderError> {
-        Ok(DealState {
-            segment_first: d.alloc(slots as usize)?,
-            deposits: d.alloc(deal::deposits_len(slots as usize, paths_per_slot))?,
-        })
-    }
-
-    /// Whether these buffers hold the deposits of `slots` slots of `paths_per_slot` paths.
-    pub(crate) fn fits(&self, slots: u32, paths_per_slot: u32) -> bool {
-        self.deposits.len() >= deal::deposits_len(slots as usize, paths_per_slot)
     }
 }
 

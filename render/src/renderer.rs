@@ -24,13 +24,13 @@ use crate::design::Choice;
 use crate::iteration::{LabelledBatch, Stage, Wavefront};
 use crate::kernels::{extend_set, with_types, Advance, Compile, Prepare};
 use crate::options::validate;
-use crate::paths::{DealState, Paths};
+use crate::paths::Paths;
 use crate::{GpuScene, Image};
 
 // The renderer's vocabulary, at the paths it has always had (`cohort_render::renderer::X`).
 pub use crate::error::RenderError;
 pub use crate::options::{
-    interleave_permutes, Algorithm, Budget, Deal, InPatch, IntegratorKind, RenderOptions, Shading,
+    interleave_permutes, Algorithm, Budget, InPatch, IntegratorKind, RenderOptions, Shading,
 };
 pub use crate::stats::{HostTimes, KernelTimes, RenderStats, Startup};
 
@@ -70,9 +70,6 @@ struct Run {
     /// The iteration whose group draws the group table holds, written by the `extend`
     /// recorded last (`cohort_kernels::group_draw`); `None` before the run's first.
     tabled: Option<u32>,
-    /// Whether a retirement of the run has dealt paths to finished slots
-    /// (`cohort_kernels::deal`): the image then sums deposits too.
-    dealt: bool,
 }
 
 /// A submitted batch of iterations and what its results are read into.
@@ -294,13 +291,6 @@ impl<'d> Renderer<'d> {
         columns: std::ops::Range<u32>,
     ) -> Result<DispatchStats, RenderError> {
         let (w, h) = self.size();
-        if self.dealt() {
-            return Err(RenderError::Options(
-                "display sums each pixel's own slots, and this run dealt paths to other \
-                 slots: render with RenderOptions::deal Off to display it"
-                    .into(),
-            ));
-        }
         if out.len() < (w as usize) * (h as usize) {
             return Err(RenderError::Options(format!(
                 "display needs {} pixels of output, the buffer has {}",
@@ -360,14 +350,6 @@ impl<'d> Renderer<'d> {
     pub fn start(&mut self) -> Result<(), RenderError> {
         let started = Instant::now();
         let d = self.device;
-        // Dealing's buffers, sized for the budget (a time budget never finishes a slot,
-        // so never deals).
-        let paths_per_slot = self.frame.paths_per_pixel.div_ceil(self.frame.copies);
-        let slots = self.frame.slots;
-        let fits = |s: &DealState| s.fits(slots, paths_per_slot);
-        if self.opts.deals(d) && paths_per_slot > 0 && !self.paths.deal.as_ref().is_some_and(fits) {
-            self.paths.deal = Some(DealState::new(d, slots, paths_per_slot)?);
-        }
         let p = &self.paths;
         let n = self.frame.slots;
         let spec_init = init_paths::spec(d, None);
@@ -389,16 +371,7 @@ impl<'d> Renderer<'d> {
         // A renderer can run again: each run starts from scratch. Copies of a pixel beyond
         // its paths budget start done (`init_paths`), and count as done slots.
         let idle = crate::wavefront::idle_slots(&self.frame);
-        d.write(&p.counters, 0, &[0, idle, 0, 0])?;
-        // Each slot's sum starts at its first path (`init_paths`), the key by which the
-        // image orders a pixel's sums once paths are dealt.
-        if let Some(dealt) = &p.deal {
-            let per_copy = n / self.frame.copies;
-            let first: Vec<u32> = (0..n)
-                .map(|g| self.frame.first_path + g / per_copy)
-                .collect();
-            d.write(&dealt.segment_first, 0, &first)?;
-        }
+        d.write(&p.counters, 0, &[0, idle])?;
         // Retiring (below) shortened a list of an earlier run.
         for count in &p.counts {
             d.write(count, 0, &[n])?;
@@ -417,7 +390,6 @@ impl<'d> Renderer<'d> {
             per_iteration: None,
             design: self.design.clone(),
             tabled: None,
-            dealt: false,
         });
         Ok(())
     }
@@ -482,15 +454,9 @@ impl<'d> Renderer<'d> {
         const IN_FLIGHT: usize = 2;
         // Fewest iterations in a batch near the end of a paths budget.
         const TAIL_BATCH: f64 = 8.0;
-        // Iterations in a batch of a run that deals: a retirement at most every 16 of a
-        // render's 50-250 iterations; 2.2 ms of an H200's work at a million slots.
-        const DEAL_BATCH: f64 = 16.0;
         // Lists this short are not worth a retirement's four dispatches.
         const RETIRE_FROM: u32 = 256;
         let retires = self.opts.retires(draws_per_lane(self.device));
-        let deals = self.opts.deals(self.device)
-            && self.frame.paths_per_pixel != 0
-            && self.paths.deal.is_some();
         let retire_at = retire_at(self.device);
         let mut in_flight: std::collections::VecDeque<Pending> = std::collections::VecDeque::new();
         loop {
@@ -518,16 +484,8 @@ impl<'d> Renderer<'d> {
                         // Fewer than 2^32 paths end in one batch (each slot ends at most
                         // one per iteration): the completed count's wrap (below) is exact.
                         let most = (u32::MAX as u64 / n.max(1) as u64).clamp(1, 64) as f64;
-                        // A run that deals sizes its batches by a count, not by time: the
-                        // retirements, one at most per batch, decide how each pixel's
-                        // paths are split into sums, so they must fall at the same
-                        // iterations on every run for its image to be the same bit for
-                        // bit.
-                        let mut want = if deals {
-                            DEAL_BATCH.min(most)
-                        } else {
-                            (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, most)
-                        };
+                        let mut want =
+                            (TARGET_SUBMIT.as_secs_f64() / per_iter.max(1e-7)).clamp(1.0, most);
                         match until {
                             // Do not overshoot a time budget by more than a tenth of what is left.
                             Budget::KernelTime(t) => {
@@ -579,18 +537,8 @@ impl<'d> Renderer<'d> {
                         && run.live * den <= run.listed as u64 * num
                         && run.listed > RETIRE_FROM
                     {
-                        run.cur = wavefront.retire(&mut b, run.cur, deals)?;
-                        if deals {
-                            // The list holds the live slots and as many finished ones
-                            // as were dealt paths, at most one per live slot; until the
-                            // next read-back that bound stands for `live` too, so that
-                            // the next retirement waits for it.
-                            run.listed = run.listed.min(2 * run.live as u32);
-                            run.live = run.listed as u64;
-                            run.dealt = true;
-                        } else {
-                            run.listed = run.live as u32;
-                        }
+                        run.cur = wavefront.retire(&mut b, run.cur)?;
+                        run.listed = run.live as u32;
                         wavefront.listed = run.listed;
                     }
                     run.cur = wavefront.record_iteration::<S, E, I>(&mut b, run.cur)?;
@@ -649,70 +597,20 @@ impl<'d> Renderer<'d> {
             let counters = completed.read(oldest.counters);
             stats.completed_paths = add_completed(stats.completed_paths, counters[0]);
             run.live = n as u64 - counters[1] as u64;
-            stats.dealt = counters[2] as u64;
             stats.wall = wall_before + resumed.elapsed();
             progress(done(stats).min(1.0), stats);
         }
     }
 
-    /// Whether the current run has dealt paths to finished slots (`cohort_kernels::deal`).
-    fn dealt(&self) -> bool {
-        self.run.as_ref().is_some_and(|r| r.dealt)
-    }
-
-    /// Sums, into `sums` per pixel, the slots' `accum` and the deposits of a run that
-    /// dealt paths, each pixel's in the order of their first paths (a sum's key with its
-    /// pixel, unique since every path is traced once): the order does not depend on which
-    /// invocation took which slot, and without deposits it is the slot order of `image`.
-    fn sum_dealt(
-        &self,
-        dealt: &DealState,
-        accum: &[Vec4],
-        sums: &mut [Vec4],
-    ) -> Result<(), RenderError> {
-        let d = self.device;
-        let state = d.read(&self.paths.state)?;
-        let first = d.read(&dealt.segment_first)?;
-        let used = d.read(&self.paths.counters)?[2] as usize;
-        let deposits = d.read(&dealt.deposits)?;
-        // (pixel, first path, sum) of every sum with a path in it.
-        let mut parts: Vec<(u32, u32, Vec4)> = deposits[..2 * used]
-            .chunks_exact(2)
-            .map(|r| (r[1].x.to_bits(), r[1].y.to_bits(), r[0]))
-            .chain(
-                accum
-                    .iter()
-                    .zip(&state)
-                    .zip(&first)
-                    .map(|((a, s), &f)| (s.x, f, *a)),
-            )
-            .filter(|p| p.2.w > 0.0)
-            .collect();
-        parts.sort_unstable_by_key(|p| (p.0, p.1));
-        for (pixel, _, a) in parts {
-            let sum = sums.get_mut(pixel as usize).ok_or_else(|| {
-                RenderError::Options(format!("a deposit names pixel {pixel}, past the image"))
-            })?;
-            *sum += a;
-        }
-        Ok(())
-    }
-
     /// The current estimate: per pixel, the mean of its completed paths. A pixel's slots
     /// (`Frame::copies`) are summed in slot order, so the sum does not depend on which
-    /// slot finished first; after dealing, its sums in the order of their first paths
-    /// (`sum_dealt`).
+    /// slot finished first.
     pub fn image(&self) -> Result<Image, RenderError> {
         let accum = self.device.read(&self.paths.accum)?;
         let (w, h) = self.size();
         let mut sums = vec![Vec4::ZERO; (w * h) as usize];
-        match self.paths.deal.as_ref().filter(|_| self.dealt()) {
-            Some(dealt) => self.sum_dealt(dealt, &accum, &mut sums)?,
-            None => {
-                for (slot, a) in accum.iter().enumerate() {
-                    sums[self.slot_to_pixel[slot] as usize] += *a;
-                }
-            }
+        for (slot, a) in accum.iter().enumerate() {
+            sums[self.slot_to_pixel[slot] as usize] += *a;
         }
         let paths: Vec<u32> = sums.iter().map(|a| a.w as u32).collect();
         let pixels = sums

@@ -68,9 +68,6 @@ pub struct RenderStats {
     /// Iterations shaded over material queues (`RenderOptions::shading`); the others
     /// were shaded by one kernel.
     pub queued_iterations: u32,
-    /// Finished slots that took half of a live slot's remaining paths at retirements
-    /// (`RenderOptions::deal`, `cohort_kernels::deal`).
-    pub dealt: u64,
     /// Where the host's time went: recording batches, submitting them, and waiting for
     /// the oldest one in flight (the GPU is busy then; recording while it is idle is
     /// what makes the wall time exceed the kernel time).

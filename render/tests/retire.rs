@@ -5,19 +5,14 @@
 //! budget (retired at once).
 
 use cohort::runtime::{BackendKind, Device};
-use cohort_render::{Algorithm, Budget, Deal, IntegratorKind, RenderOptions, Renderer, Shading};
+use cohort_render::{Algorithm, Budget, IntegratorKind, RenderOptions, Renderer, Shading};
 
 const BACKENDS: [BackendKind; 3] = [BackendKind::Cpu, BackendKind::Vulkan, BackendKind::Wgpu];
 
 /// The image, and the kernel time of the compaction stage (where retiring is counted).
 fn render(dev: &Device, opts: &RenderOptions) -> (Vec<[f32; 3]>, f64) {
     let scene = cohort_scenes::embedded::load("cornell").unwrap();
-    // Retiring alone: dealing (a GPU's default) sums a pixel's paths in another order.
-    let opts = RenderOptions {
-        deal: Deal::Off,
-        ..opts.clone()
-    };
-    let mut r = Renderer::new(dev, &scene, opts).expect("renderer");
+    let mut r = Renderer::new(dev, &scene, opts.clone()).expect("renderer");
     let (img, stats) = r.render(|_, _| {}).expect("render");
     let pixels = img.pixels.iter().map(|p| p.to_array()).collect();
     (pixels, stats.kernel.compact.as_secs_f64())

@@ -83,7 +83,6 @@ fn every_variant_is_locked_and_valid() {
 fn renderer_variants() -> Vec<variants::Variant> {
     use cohort::{Group, KernelInfo, Spec};
     use cohort_kernels::compact::{compact_count, compact_offsets, compact_scatter};
-    use cohort_kernels::deal::{deal, deal_commit};
     use cohort_kernels::display::display;
     use cohort_kernels::extend::{extend, init_paths};
     use cohort_kernels::group_draw::draw_groups;
@@ -172,14 +171,6 @@ fn renderer_variants() -> Vec<variants::Variant> {
             &mark_live::INFO,
             Group::Thread,
             mark_live::build,
-        ),
-        // Dealing paths to finished slots after a retirement.
-        variant("deal", &deal::INFO, Group::Thread, deal::build),
-        variant(
-            "deal_commit",
-            &deal_commit::INFO,
-            Group::Thread,
-            deal_commit::build,
         ),
         // Ray reordering (`cohort render --reorder K`).
         variant(

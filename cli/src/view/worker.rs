@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use cohort::runtime::{Device, GpuBuffer};
 use cohort_render::provenance::Provenance;
 use cohort_render::{
-    output, Budget, Deal, GpuScene, PreparedScene, RenderOptions, RenderStats, Renderer, SceneBvh,
+    output, Budget, GpuScene, PreparedScene, RenderOptions, RenderStats, Renderer, SceneBvh,
 };
 use cohort_scenes::{Camera, Scene};
 
@@ -128,7 +128,7 @@ pub fn run(
         .options
         .iter()
         .map(|o| {
-            Renderer::with_scene(&device, &setup.scene, gpu.clone(), shown(o.clone()))
+            Renderer::with_scene(&device, &setup.scene, gpu.clone(), o.clone())
                 .map_err(|e| e.to_string())
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -184,7 +184,7 @@ pub fn run(
                     // The camera stays: `reconfigure` changes only the options.
                     // A refused configuration leaves the side as it was, and says why.
                     let s = &mut sides[i];
-                    match s.reconfigure(shown(opts)) {
+                    match s.reconfigure(opts) {
                         Ok(()) => {
                             s.start().map_err(|e| e.to_string())?;
                             view.restarted(i);
@@ -215,16 +215,6 @@ pub fn run(
         }
         view.publish(&sides, &shared)?;
         wake();
-    }
-}
-
-/// `opts` for a side the window shows: without dealing (`RenderOptions::deal`), since
-/// `display` sums each pixel's own slots, which dealing would leave without the paths it
-/// dealt to others until the end.
-fn shown(opts: RenderOptions) -> RenderOptions {
-    RenderOptions {
-        deal: Deal::Off,
-        ..opts
     }
 }
 
