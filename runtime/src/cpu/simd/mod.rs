@@ -211,10 +211,10 @@ pub fn ran_host(k: &Arc<CompiledKernel>, lanes: u32, ns: u64) {
 }
 
 fn start_if_cold(kernels: &mut HashMap<(u64, u32), State>, k: &Arc<CompiledKernel>, lanes: u32) {
-    if let Some(State::Cold { ir, .. }) = kernels.get(&(k.id, lanes)) {
-        let ir = Arc::clone(ir);
+    if let Some(State::Cold { ir, key, .. }) = kernels.get(&(k.id, lanes)) {
+        let (ir, key) = (Arc::clone(ir), *key);
         kernels.insert((k.id, lanes), State::Pending);
-        spawn_build(Arc::clone(k), lanes, ir);
+        spawn_build(Arc::clone(k), lanes, ir, key);
     }
 }
 
@@ -267,11 +267,11 @@ fn probe(k: &CompiledKernel, lanes: u32) -> State {
     State::Done(r)
 }
 
-fn spawn_build(k: Arc<CompiledKernel>, lanes: u32, ir: Arc<str>) {
+fn spawn_build(k: Arc<CompiledKernel>, lanes: u32, ir: Arc<str>, key: u64) {
     // Named, so that a crash report or a profile says which thread LLVM ran on.
     let build_thread = std::thread::Builder::new().name("cohort-llvm".into());
     let spawned = build_thread.spawn(move || {
-        let r = build(&k, &ir);
+        let r = build(&k, &ir, key);
         let took = r.as_ref().map_or(std::time::Duration::ZERO, |b| b.1);
         let r = r.map(|b| b.0);
         let c = cache();
@@ -302,8 +302,13 @@ fn spawn_build(k: Arc<CompiledKernel>, lanes: u32, ir: Arc<str>) {
     spawned.expect("a thread for LLVM to compile a vector form on");
 }
 
-/// Compiles (or links from the cache) `k`'s vector form from its IR; with LLVM's time.
-fn build(k: &CompiledKernel, ir: &str) -> Result<(SimdKernel, std::time::Duration), String> {
+/// Compiles (or links from the cache) `k`'s vector form from its IR, whose cache key is
+/// `key`; with LLVM's time.
+fn build(
+    k: &CompiledKernel,
+    ir: &str,
+    key: u64,
+) -> Result<(SimdKernel, std::time::Duration), String> {
     let jit = llvm::jit().as_ref().map_err(Clone::clone)?;
     let (addr, took) = jit.compile(ir, lower::RUN, &k.name).map_err(|e| {
         // The lowering wrote IR that LLVM refuses: a bug of this backend, not the kernel's.
@@ -312,7 +317,7 @@ fn build(k: &CompiledKernel, ir: &str) -> Result<(SimdKernel, std::time::Duratio
             k.name, k.location
         )
     })?;
-    Ok((entry(addr, jit.key(ir)), took))
+    Ok((entry(addr, key), took))
 }
 
 fn entry(addr: usize, key: u64) -> SimdKernel {
