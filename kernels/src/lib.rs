@@ -45,3 +45,4 @@ pub mod traverse_cw;
 pub mod traverse_stream;
 pub mod traverse_wide;
 pub mod validate;
+mod words;

@@ -14,11 +14,16 @@
 //!    it in the block`: a stable partition, so that the queues and the groups of coherent
 //!    sampling that `extend` forms over them do not depend on scheduling.
 //!
+//! On the CPU backend each of the three runs as one loop per dispatch that writes the
+//! same words (`whole`), instead of as coroutines switching at every barrier.
+//!
 //! The queues (`out`, twice the slots) hold each ray's slot, then at `n +` the same place
 //! its position in the live list, where `extend` writes its compaction flag.
 
 use crate::layout::{Material, Triangle, DONE, MISS};
 use cohort::prelude::*;
+
+mod whole;
 
 /// Invocations per workgroup, and rays per block, of the three kernels.
 pub const WG: u32 = 256;
@@ -63,7 +68,7 @@ pub fn queue_of(
 }
 
 /// Per block: each listed ray's queue, and the block's count of each queue.
-#[kernel(workgroup = 256, loops = finite)]
+#[kernel(workgroup = 256, loops = finite, cpu_dispatch = crate::queues::whole::queue_count_whole)]
 #[allow(clippy::too_many_arguments)]
 pub fn queue_count(
     #[builtin(local_index)] li: u32,
@@ -103,7 +108,7 @@ pub fn queue_count(
 
 /// One workgroup: the block counts' exclusive prefix sums, queue-major, in place; each
 /// queue's size, start and list length (`queued[4 q ..]`), and its indirect dispatch.
-#[kernel(workgroup = 256, loops = finite)]
+#[kernel(workgroup = 256, loops = finite, cpu_dispatch = crate::queues::whole::queue_offsets_whole)]
 pub fn queue_offsets(
     #[builtin(local_index)] li: u32,
     #[workgroup] part: &mut [u32; 256],
@@ -185,7 +190,7 @@ pub fn queue_offsets(
 
 /// Per block: each listed ray to its place in its queue (stable), its slot at `out[at]`
 /// and its position in the live list at `out[n + at]`.
-#[kernel(workgroup = 256, loops = finite)]
+#[kernel(workgroup = 256, loops = finite, cpu_dispatch = crate::queues::whole::queue_scatter_whole)]
 pub fn queue_scatter(
     #[builtin(local_index)] li: u32,
     #[builtin(workgroup_index)] wg: u32,

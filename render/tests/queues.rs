@@ -19,8 +19,20 @@ fn next(state: &mut u32) -> u32 {
     *state
 }
 
-#[test]
-fn the_queues_partition_the_rays_stably_by_kind() {
+/// A scene's materials and triangles, the partition's table, and `slots` slots listed in
+/// a scrambled order (`count` of them listed), some done, some missed.
+struct Inputs {
+    materials: Vec<Material>,
+    table: [u32; TABLE_LEN],
+    tris: Vec<Triangle>,
+    slots: u32,
+    count: u32,
+    ids: Vec<u32>,
+    state: Vec<UVec4>,
+    hits: Vec<Vec4>,
+}
+
+fn inputs(slots: u32, count: u32, seed: u32) -> Inputs {
     // Kinds 0, 3 and 5 have queues 2, 0 and 1, blends queue 3. Materials: one of each
     // kind, a blend (of kind 0, which must not decide its queue), and kind 3 again.
     let kinds = [0u32, 3, 5, 0, 3];
@@ -41,24 +53,14 @@ fn the_queues_partition_the_rays_stably_by_kind() {
     table[BLEND_ENTRY + 1] = 4;
     // Workgroups of 64 for the dispatches.
     table[BLEND_ENTRY + 2] = 64;
-    let queue_of_material = |m: usize| {
-        if materials[m].blend != 0 {
-            3
-        } else {
-            table[materials[m].kind as usize]
-        }
-    };
+    table[BLEND_ENTRY + 3] = 65535;
     let tris: Vec<Triangle> = (0..11)
         .map(|t| Triangle {
             material: (t * 7 % 5) as u32,
             ..Default::default()
         })
         .collect();
-    // Slots listed in a scrambled order, some done, some missed; more rays than one
-    // workgroup and a count below the slots.
-    let slots = 5000u32;
-    let count = 4321u32;
-    let mut s = 2024u32;
+    let mut s = seed;
     let mut ids: Vec<u32> = (0..slots).collect();
     for i in (1..ids.len()).rev() {
         let j = next(&mut s) as usize % (i + 1);
@@ -75,17 +77,94 @@ fn the_queues_partition_the_rays_stably_by_kind() {
         };
         hits.push(Vec4::new(0.5, 0.25, 0.25, f32::from_bits(tri)));
     }
+    Inputs {
+        materials,
+        table,
+        tris,
+        slots,
+        count,
+        ids,
+        state,
+        hits,
+    }
+}
+
+/// What the partition of `inp` on `dev` writes: keys, hist, queued, args and out, each
+/// buffer starting from stale words.
+fn partition(dev: &Device, inp: &Inputs) -> [Vec<u32>; 5] {
+    let slots = inp.slots;
+    let table_b = dev.upload(&inp.table).unwrap();
+    let count_b = dev.upload(&[inp.count]).unwrap();
+    let ids_b = dev.upload(&inp.ids).unwrap();
+    let state_b = dev.upload(&inp.state).unwrap();
+    let hits_b = dev.upload(&inp.hits).unwrap();
+    let tris_b = dev.upload(&inp.tris).unwrap();
+    let mats_b = dev.upload(&inp.materials).unwrap();
+    let keys_b = dev.upload(&vec![5u32; slots.max(1) as usize]).unwrap();
+    // Stale counts from an earlier partition must not matter.
+    let hist_b = dev.upload(&vec![7u32; queues::hist_len(slots)]).unwrap();
+    let queued_b = dev.upload(&[9u32; 4 * MAX_QUEUES as usize]).unwrap();
+    let args_b = dev.upload(&[9u32; 3 * MAX_QUEUES as usize]).unwrap();
+    let out_b = dev
+        .upload(&vec![u32::MAX; 2 * slots.max(1) as usize])
+        .unwrap();
+    let mut b = dev.batch();
+    queues::record(
+        &mut b,
+        &queues::specs(dev),
+        slots,
+        &count_b,
+        &ids_b,
+        &state_b,
+        &hits_b,
+        &tris_b,
+        &mats_b,
+        &QueueBuffers {
+            table: &table_b,
+            keys: &keys_b,
+            hist: &hist_b,
+            queued: &queued_b,
+            args: &args_b,
+            out: &out_b,
+        },
+    )
+    .unwrap();
+    b.submit().unwrap();
+    [&keys_b, &hist_b, &queued_b, &args_b, &out_b].map(|b| dev.read(b).unwrap())
+}
+
+#[test]
+fn the_queues_partition_the_rays_stably_by_kind() {
+    // More rays than one workgroup and a count below the slots.
+    let mut inp = inputs(5000, 4321, 2024);
+    let Inputs {
+        ref materials,
+        ref tris,
+        count,
+        ..
+    } = inp;
+    let table = inp.table;
+    let queue_of_material = |m: usize| {
+        if materials[m].blend != 0 {
+            3
+        } else {
+            table[materials[m].kind as usize]
+        }
+    };
     let key = |slot: u32| {
-        let tri = hits[slot as usize].w.to_bits();
-        if state[slot as usize].w & DONE != 0 || tri == MISS {
+        let tri = inp.hits[slot as usize].w.to_bits();
+        if inp.state[slot as usize].w & DONE != 0 || tri == MISS {
             0
         } else {
             queue_of_material(tris[tri as usize].material as usize)
         }
     };
     // The stable partition: (slot, position in the list) by queue, in list order.
-    let mut want: Vec<(u32, u32)> = (0..count).map(|g| (ids[g as usize], g)).collect();
+    let mut want: Vec<(u32, u32)> = (0..count).map(|g| (inp.ids[g as usize], g)).collect();
     want.sort_by_key(|&(slot, _)| key(slot));
+    let sizes: Vec<u32> = (0..4u32)
+        .map(|q| want.iter().filter(|&&(slot, _)| key(slot) == q).count() as u32)
+        .collect();
     for kind in BACKENDS {
         let Some(dev) = Device::for_tests(kind) else {
             continue;
@@ -93,44 +172,8 @@ fn the_queues_partition_the_rays_stably_by_kind() {
         let name = kind.name();
         // At most 3 workgroups in x: dispatches fold into y.
         for max_x in [65535u32, 3] {
-            let mut t = table;
-            t[BLEND_ENTRY + 3] = max_x;
-            let table_b = dev.upload(&t).unwrap();
-            let count_b = dev.upload(&[count]).unwrap();
-            let ids_b = dev.upload(&ids).unwrap();
-            let state_b = dev.upload(&state).unwrap();
-            let hits_b = dev.upload(&hits).unwrap();
-            let tris_b = dev.upload(&tris).unwrap();
-            let mats_b = dev.upload(&materials).unwrap();
-            let keys_b = dev.alloc::<u32>(slots as usize).unwrap();
-            // Stale counts from an earlier partition must not matter.
-            let hist_b = dev.upload(&vec![7u32; queues::hist_len(slots)]).unwrap();
-            let queued_b = dev.alloc::<u32>(4 * MAX_QUEUES as usize).unwrap();
-            let args_b = dev.alloc::<u32>(3 * MAX_QUEUES as usize).unwrap();
-            let out_b = dev.upload(&vec![u32::MAX; 2 * slots as usize]).unwrap();
-            let mut b = dev.batch();
-            queues::record(
-                &mut b,
-                &queues::specs(&dev),
-                slots,
-                &count_b,
-                &ids_b,
-                &state_b,
-                &hits_b,
-                &tris_b,
-                &mats_b,
-                &QueueBuffers {
-                    table: &table_b,
-                    keys: &keys_b,
-                    hist: &hist_b,
-                    queued: &queued_b,
-                    args: &args_b,
-                    out: &out_b,
-                },
-            )
-            .unwrap();
-            b.submit().unwrap();
-            let out = dev.read(&out_b).unwrap();
+            inp.table[BLEND_ENTRY + 3] = max_x;
+            let [_, _, queued, args, out] = partition(&dev, &inp);
             let n = count as usize;
             let got: Vec<(u32, u32)> = (0..n).map(|at| (out[at], out[n + at])).collect();
             assert_eq!(got, want, "{name}: not the stable partition by queue");
@@ -138,13 +181,10 @@ fn the_queues_partition_the_rays_stably_by_kind() {
                 out[2 * n..].iter().all(|&x| x == u32::MAX),
                 "{name}: wrote past the queues"
             );
-            let queued = dev.read(&queued_b).unwrap();
-            let args = dev.read(&args_b).unwrap();
             let mut start = 0u32;
-            for q in 0..4u32 {
-                let size = want.iter().filter(|&&(slot, _)| key(slot) == q).count() as u32;
+            for (q, &size) in sizes.iter().enumerate() {
                 assert!(size > 0, "the test leaves queue {q} empty");
-                let at = 4 * q as usize;
+                let at = 4 * q;
                 assert_eq!(
                     &queued[at..at + 3],
                     &[size, start, count],
@@ -152,7 +192,7 @@ fn the_queues_partition_the_rays_stably_by_kind() {
                 );
                 let groups = size.div_ceil(64);
                 let x = groups.min(max_x);
-                let a = 3 * q as usize;
+                let a = 3 * q;
                 assert_eq!(
                     &args[a..a + 3],
                     &[x, groups.div_ceil(x), 1],
@@ -161,6 +201,39 @@ fn the_queues_partition_the_rays_stably_by_kind() {
                 start += size;
             }
         }
+    }
+}
+
+/// On the CPU backend, the queue kernels' whole-dispatch loops write what their host forms
+/// (workgroup arrays and barriers) write: the same keys, block counts, queues, dispatches
+/// and lists, word for word, from empty lists to lists of many workgroups, counts below
+/// the slots, and dispatches folded into y.
+#[test]
+fn queues_cpu_whole_dispatches_write_the_host_forms_words() {
+    use cohort::runtime::cpu::simd::Forms;
+    let whole = Device::cpu_with(Forms::Measured).unwrap();
+    let host = Device::cpu_with(Forms::Host).unwrap();
+    for (slots, count, max_x) in [
+        (0, 0, 65535),
+        (1, 1, 65535),
+        (1, 0, 65535),
+        (256, 256, 65535),
+        (257, 257, 2),
+        (5000, 4321, 3),
+        (70_000, 65_536, 65535),
+    ] {
+        let mut inp = inputs(slots, count, 77 + slots);
+        inp.table[BLEND_ENTRY + 3] = max_x;
+        assert_eq!(
+            partition(&whole, &inp),
+            partition(&host, &inp),
+            "{count} of {slots} slots listed, at most {max_x} workgroups in x"
+        );
+    }
+    let counts = whole.form_counts();
+    for k in ["queue_count", "queue_offsets", "queue_scatter"] {
+        let c = counts.iter().find(|c| c.kernel.starts_with(k)).expect(k);
+        assert!(c.whole > 0 && c.host == 0, "{k} ran {c:?}");
     }
 }
 

@@ -9,61 +9,15 @@
 //! alone 4.7 ms), for partitions of at most 65536 slots that a loop does in tens of
 //! microseconds.
 //!
-//! Buffers are read and written through bounds-checked raw views, never as references:
-//! a dispatch may bind one buffer twice, as it may on a GPU. An index out of bounds panics,
-//! as the host form's would, and the backend reports it as the dispatch's error.
+//! Buffers are bound as [`Words`] (`crate::words`).
 
 use super::{block_count, BLOCK, PER_THREAD, WG, WORDS};
+use crate::words::Words;
 use cohort::runtime::cpu::LaneArgs;
-
-/// A bound buffer of `u32`s, read and written by index.
-#[derive(Clone, Copy)]
-struct Words {
-    ptr: *mut u32,
-    len: usize,
-    /// Its parameter's name, for the panic message of an index out of bounds.
-    name: &'static str,
-}
-
-impl Words {
-    /// Storage parameter `i` of the dispatch.
-    ///
-    /// # Safety
-    /// Buffer `i` holds `u32`s (the backend binds the kernel's buffers in parameter order).
-    unsafe fn bound(a: &LaneArgs<'_>, i: usize, name: &'static str) -> Words {
-        let s = a.storage_mut::<u32>(i);
-        Words {
-            ptr: s as *mut u32,
-            len: s.len(),
-            name,
-        }
-    }
-
-    fn check(&self, i: usize) {
-        assert!(
-            i < self.len,
-            "index out of bounds: `{}` has {} elements but the index is {i}",
-            self.name,
-            self.len
-        );
-    }
-
-    fn get(&self, i: usize) -> u32 {
-        self.check(i);
-        // SAFETY: in bounds; the buffer stays bound for the dispatch.
-        unsafe { self.ptr.add(i).read() }
-    }
-
-    fn set(&self, i: usize, v: u32) {
-        self.check(i);
-        // SAFETY: as for `get`.
-        unsafe { self.ptr.add(i).write(v) }
-    }
-}
 
 /// Workgroups of a dispatch of `invocations` (the kernels' workgroup is [`WG`]).
 fn groups(invocations: u64) -> u32 {
-    (invocations / u64::from(WG)).min(u64::from(u32::MAX)) as u32
+    crate::words::groups(invocations, WG)
 }
 
 /// `compact_count`: each block's column words (bit `j` of word `c`: the flag of ray
