@@ -243,8 +243,11 @@ impl TypedOp for Compile<'_> {
         let queue_sets = plan(shading).sets;
         let info = d.info();
         // `Auto` measures both designs where the choice cannot change the image and
-        // timestamps can tell them apart (`crate::design`); the CPU backend and the
-        // software driver would only pay for the partition and for more compilation.
+        // timestamps can tell them apart (`crate::design`). Not on the software driver,
+        // which would only pay for the partition and for more compilation, nor on the CPU
+        // backend: there queues took 0.80-1.31x of one kernel's time on the test scenes
+        // of several kinds (BENCHMARKS.md), and a trial would compile a vector form per
+        // queue besides the one kernel's.
         let trial = queue_sets.len() > 1
             && o.per_path_sampling()
             && info.timestamps
