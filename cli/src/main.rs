@@ -158,9 +158,10 @@ struct RenderArgs {
     reorder: u32,
     /// How shading is organised: one kernel built with the scene's BSDF kinds, material
     /// queues (one kernel per kind over the rays that hit it), or `auto`, the default:
-    /// both measured on the render and the faster kept (BENCHMARKS.md: each wins on some
-    /// scenes). The image is the same either way, except with coherent groups, which
-    /// form over the queues (and where `auto` keeps one kernel).
+    /// on a GPU, both measured on the render and the faster kept (BENCHMARKS.md: each wins
+    /// on some scenes); on the CPU backend and the software driver, one kernel. The image
+    /// is the same either way, except with coherent groups, which form over the queues
+    /// (and where `auto` keeps one kernel).
     #[arg(long, value_enum, default_value_t = ShadingChoice::Auto)]
     shading: ShadingChoice,
     /// Ray slots in flight: paths traced at once. Rounded up to whole copies of the image
