@@ -22,7 +22,7 @@ fn groups(invocations: u64) -> u32 {
     crate::words::groups(invocations, WG)
 }
 
-/// Queues of a table: its count, no more than the keys a block can count.
+/// The number of queues in a table (`table[BLEND_ENTRY + 1]`).
 fn queue_count_of(table: &Words) -> u32 {
     table.get(BLEND_ENTRY + 1)
 }
@@ -66,7 +66,8 @@ pub fn queue_count_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
                 *c += 1;
             }
         }
-        // Invocations past the list hold the key MAX_QUEUES, which no table's queue has.
+        // Invocations past the list hold the key MAX_QUEUES, and the kernel counts them as
+        // that queue's (a table made by the renderer has fewer queues).
         per_queue[MAX_QUEUES as usize] += WG - (last - first);
         // The invocations below the table's queue count write their queue's count.
         for q in 0..queues.min(WG) {
