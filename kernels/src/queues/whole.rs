@@ -51,7 +51,7 @@ pub fn queue_count_whole(a: &LaneArgs<'_>, invocations: u64) -> bool {
     let n = count.get(0);
     let blocks = queue_blocks(n);
     // `queue_of` reads the table as a slice: a copy, since a dispatch may bind it twice.
-    let table_words: Vec<u32> = (0..super::TABLE_LEN).map(|i| table.get(i)).collect();
+    let table_words: [u32; super::TABLE_LEN] = std::array::from_fn(|i| table.get(i));
     let queues = queue_count_of(&table);
     let mut per_queue = [0u32; WG as usize];
     for wg in 0..groups(invocations).min(blocks) {
